@@ -1,0 +1,68 @@
+# The two set-up commands of the README, and the pieces they share.
+#   make demo   install what is missing, build, run the demo
+#   make test   install what is missing, build, run every test (gtest + rostest)
+#   make build  build only; every tool is then build/bin/<tool>
+SHELL := /bin/bash
+.DEFAULT_GOAL := build
+
+REPO := $(CURDIR)
+WS := $(REPO)/build/ws
+BIN := $(REPO)/build/bin
+JOBS ?= $(shell nproc)
+# Debian's python3 (catkin needs its modules) must win over any pyenv shim.
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+export STEREO_FABMAP_SLAM_DATA ?= $(abspath $(REPO)/../shared/data)
+
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
+
+# Debian 12 packages the package builds and tests with (ROS 1 from Debian itself).
+DEBIAN_PACKAGES := \
+  build-essential cmake catkin python3-catkin-pkg \
+  ros-core-dev libroscpp-dev ros-message-generation \
+  libnodeletlib-dev libnodeletlib-tools libnodelet-dev pluginlib-dev \
+  libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev \
+  libmessage-filters-dev librosbag-dev python3-rosbag python3-rostest \
+  libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev libvisualization-msgs-dev \
+  libstd-srvs-dev \
+  libceres-dev libopencv-dev libopencv-contrib-dev libeigen3-dev libyaml-cpp-dev \
+  googletest opencv-doc
+
+CATKIN_MAKE := catkin_make -C $(WS) \
+  -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+  -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
+
+.PHONY: deps build test demo clean format
+
+deps:
+	@missing=$$(for p in $(DEBIAN_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; \
+	  done | tr '\n' ' '); \
+	if [ -n "$${missing// }" ]; then \
+	  echo "Installing missing Debian packages: $$missing"; \
+	  $(SUDO) apt-get update -q && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
+	fi
+
+$(WS)/src/stereo_fabmap_slam:
+	mkdir -p $(WS)/src
+	ln -sfn $(REPO) $@
+
+build: deps $(WS)/src/stereo_fabmap_slam
+	$(CATKIN_MAKE) -j$(JOBS)
+
+# Builds the test programs in parallel, then runs them one at a time (each rostest starts its
+# own master) and closes with one line "tests: N passed, N failed, N skipped".
+test: build
+	$(CATKIN_MAKE) -j$(JOBS) tests
+	rm -rf $(WS)/build/test_results
+	$(CATKIN_MAKE) -j1 run_tests
+	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
+
+demo: build
+	bash scripts/demo.sh
+
+clean:
+	rm -rf build
+
+format:
+	clang-format -i $$(git ls-files '*.cpp' '*.h')

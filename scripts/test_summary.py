@@ -1,0 +1,39 @@
+#!/usr/bin/env python3
+"""Counts test cases in the JUnit XML files that catkin's run_tests leaves behind.
+
+Prints every failed case with its message, then one closing line
+"tests: N passed, N failed, N skipped"; exits 1 if any failed or if no test ran at all.
+(catkin_test_results counts each gtest case twice, once for its suite and once for the file.)
+"""
+import pathlib
+import sys
+import xml.etree.ElementTree as ElementTree
+
+
+def main(results_dir):
+    passed, failed, skipped = 0, [], 0
+    files = sorted(pathlib.Path(results_dir).rglob("*.xml"))
+    for path in files:
+        try:
+            root = ElementTree.parse(path).getroot()
+        except ElementTree.ParseError as error:
+            failed.append(f"{path.name}: unreadable result file ({error})")
+            continue
+        for case in root.iter("testcase"):
+            name = f"{case.get('classname', '')}.{case.get('name', '')}"
+            problems = case.findall("failure") + case.findall("error")
+            if problems:
+                message = (problems[0].get("message") or problems[0].text or "").strip()
+                failed.append(f"{path.name}: {name}: {message.splitlines()[0] if message else ''}")
+            elif case.find("skipped") is not None or case.get("status") == "notrun":
+                skipped += 1
+            else:
+                passed += 1
+    for line in failed:
+        print(f"FAILED {line}")
+    print(f"tests: {passed} passed, {len(failed)} failed, {skipped} skipped")
+    return 1 if failed or passed == 0 else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))

@@ -1,0 +1,121 @@
+#include "stereo_fabmap_slam/camera/camera_calibration.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "stereo_fabmap_slam/io/csv_reader.h"
+
+namespace stereo_fabmap_slam::camera {
+namespace {
+
+Eigen::Isometry3d ParseTransform(const io::YamlFile& file, const YAML::Node& node,
+                                 const std::string& key) {
+  const YAML::Node child = file.Child(node, key);
+  const std::vector<double> values =
+      child.IsMap() ? file.Numbers(child, "data", 16) : file.Numbers(node, key, 16);
+  if (child.IsMap() && (file.Number(child, "rows") != 4 || file.Number(child, "cols") != 4)) {
+    throw io::FileError(file.source(), child.Mark().line + 1, "'" + key + "' must be 4x4");
+  }
+  Eigen::Matrix4d matrix;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) matrix(r, c) = values[4 * r + c];
+  }
+  const Eigen::Matrix3d rotation = matrix.topLeftCorner<3, 3>();
+  const double orthogonality =
+      (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm();
+  if (orthogonality > 1e-4 || std::abs(rotation.determinant() - 1.0) > 1e-4 ||
+      (matrix.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
+    throw io::FileError(file.source(), child.Mark().line + 1,
+                        "'" + key + "' is not a rigid transform");
+  }
+  // Re-orthonormalise: files store rotations to about 1e-9, Eigen's Isometry wants exact ones.
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  transform.linear() = Eigen::Quaterniond(rotation).normalized().toRotationMatrix();
+  transform.translation() = matrix.topRightCorner<3, 1>();
+  return transform;
+}
+
+}  // namespace
+
+cv::Matx33d CameraCalibration::CameraMatrix() const {
+  return cv::Matx33d(fx, 0, cx, 0, fy, cy, 0, 0, 1);
+}
+
+void CameraCalibration::Validate() const {
+  if (resolution.width <= 0 || resolution.height <= 0) {
+    throw std::invalid_argument("camera resolution must be positive");
+  }
+  if (!(fx > 0) || !(fy > 0)) throw std::invalid_argument("focal lengths must be positive");
+  if (!(cx > 0 && cx < resolution.width && cy > 0 && cy < resolution.height)) {
+    throw std::invalid_argument("principal point must lie inside the image");
+  }
+  if (distortion.size() != 4 && distortion.size() != 5) {
+    throw std::invalid_argument("radial-tangential distortion needs 4 or 5 coefficients");
+  }
+}
+
+Eigen::Isometry3d StereoCalibration::T_right_left() const {
+  return right.T_body_camera.inverse() * left.T_body_camera;
+}
+
+void StereoCalibration::Validate() const {
+  left.Validate();
+  right.Validate();
+  if (left.resolution != right.resolution) {
+    throw std::invalid_argument("left and right cameras must have the same resolution");
+  }
+  if (T_right_left().translation().norm() < 1e-3) {
+    throw std::invalid_argument("stereo baseline is below 1 mm: check T_BS of both cameras");
+  }
+}
+
+CameraCalibration ParseCameraCalibration(const io::YamlFile& file, const YAML::Node& node) {
+  CameraCalibration calibration;
+  if (file.Has(node, "camera_model") && file.String(node, "camera_model") != "pinhole") {
+    throw io::FileError(file.source(), node["camera_model"].Mark().line + 1,
+                        "camera_model must be 'pinhole'");
+  }
+  const std::string model = file.String(node, "distortion_model");
+  if (model != "radial-tangential" && model != "radtan" && model != "plumb_bob") {
+    throw io::FileError(file.source(), node["distortion_model"].Mark().line + 1,
+                        "unsupported distortion_model '" + model +
+                            "' (supported: radial-tangential, radtan, plumb_bob)");
+  }
+  const std::vector<double> resolution = file.Numbers(node, "resolution", 2);
+  calibration.resolution =
+      cv::Size(static_cast<int>(resolution[0]), static_cast<int>(resolution[1]));
+  const std::vector<double> intrinsics = file.Numbers(node, "intrinsics", 4);
+  calibration.fx = intrinsics[0];
+  calibration.fy = intrinsics[1];
+  calibration.cx = intrinsics[2];
+  calibration.cy = intrinsics[3];
+  calibration.distortion = file.Numbers(node, "distortion_coefficients");
+  calibration.T_body_camera = ParseTransform(file, node, "T_BS");
+  if (file.Has(node, "rate_hz")) calibration.rate_hz = file.Number(node, "rate_hz");
+  try {
+    calibration.Validate();
+  } catch (const std::invalid_argument& error) {
+    throw io::FileError(file.source(), node.Mark().line + 1, error.what());
+  }
+  return calibration;
+}
+
+CameraCalibration ReadEurocSensorYaml(const std::string& path) {
+  const io::YamlFile file = io::YamlFile::Load(path);
+  return ParseCameraCalibration(file, file.root());
+}
+
+StereoCalibration ReadStereoCalibrationYaml(const std::string& path) {
+  const io::YamlFile file = io::YamlFile::Load(path);
+  StereoCalibration stereo;
+  stereo.left = ParseCameraCalibration(file, file.Child(file.root(), "left"));
+  stereo.right = ParseCameraCalibration(file, file.Child(file.root(), "right"));
+  try {
+    stereo.Validate();
+  } catch (const std::invalid_argument& error) {
+    throw io::FileError(path, 0, error.what());
+  }
+  return stereo;
+}
+
+}  // namespace stereo_fabmap_slam::camera

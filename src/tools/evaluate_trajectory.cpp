@@ -1,0 +1,135 @@
+// Compares an estimated trajectory with ground truth: ATE (evo_ape -a convention) and RPE.
+#include <cstdio>
+#include <exception>
+#include <optional>
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "command_line.h"
+#include "stereo_fabmap_slam/camera/camera_calibration.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_plot.h"
+
+namespace {
+
+using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
+
+constexpr char kUsage[] =
+    "usage: evaluate_trajectory --gt FILE --est FILE [--align se3|sim3|none] [--max-dt S]\n"
+    "                           [--gt-to-camera sensor.yaml] [--rpe-delta D] [--rpe-unit "
+    "frames|m]\n"
+    "                           [--json] [--plot out.png]\n"
+    "Trajectory files: TUM (t x y z qx qy qz qw), EuRoC CSV (.csv, stamps in ns) or KITTI (3x4).\n"
+    "ATE: positions of the estimate aligned to the ground truth (Umeyama, --align, default se3),\n"
+    "then RMSE/mean/median/max of the position differences, as evo_ape -a.\n"
+    "RPE: for every matched pose i and the pose j --rpe-delta later (default 1 frame), the\n"
+    "translation norm and angle of (GT_i^-1 GT_j)^-1 (EST_i^-1 EST_j).\n";
+
+void PrintStatsRow(const char* name, const evaluation::ErrorStatistics& s, double unit_scale) {
+  std::printf("%-16s %10.4f %10.4f %10.4f %10.4f %8zu\n", name, s.rmse * unit_scale,
+              s.mean * unit_scale, s.median * unit_scale, s.max * unit_scale, s.count);
+}
+
+void PrintTable(const evaluation::EvaluationResult& r, const evaluation::EvaluationOptions& o,
+                const std::string& gt, const std::string& est) {
+  std::printf("ground truth  %s\n", gt.c_str());
+  std::printf("estimate      %s\n", est.c_str());
+  std::printf("matched       %zu of %zu estimated poses (max dt %.4f s)\n", r.matched,
+              r.estimated_poses, o.max_dt);
+  std::printf("alignment     %s, scale %.6f\n\n", evaluation::AlignmentModeName(o.alignment),
+              r.alignment.scale);
+  std::printf("%-16s %10s %10s %10s %10s %8s\n", "", "rmse", "mean", "median", "max", "count");
+  PrintStatsRow("ATE [cm]", r.ate, 100.0);
+  PrintStatsRow("RPE trans [cm]", r.rpe.translation, 100.0);
+  PrintStatsRow("RPE rot [deg]", r.rpe.rotation_deg, 1.0);
+  std::printf("\nRPE step: %g %s\n", o.rpe_delta.value,
+              o.rpe_delta.unit == evaluation::RpeDelta::Unit::kFrames ? "frame(s)" : "m");
+}
+
+void PrintJson(const evaluation::EvaluationResult& r, const evaluation::EvaluationOptions& o) {
+  std::printf(
+      "{\"ate_rmse\": %.9g, \"ate_mean\": %.9g, \"ate_median\": %.9g, \"ate_max\": %.9g, "
+      "\"matched\": %zu, \"estimated_poses\": %zu, \"alignment\": \"%s\", \"scale\": %.9g, "
+      "\"rpe_trans_rmse\": %.9g, \"rpe_trans_mean\": %.9g, \"rpe_rot_rmse_deg\": %.9g, "
+      "\"rpe_rot_mean_deg\": %.9g, \"rpe_pairs\": %zu, \"rpe_delta\": %.9g, "
+      "\"rpe_unit\": \"%s\"}\n",
+      r.ate.rmse, r.ate.mean, r.ate.median, r.ate.max, r.matched, r.estimated_poses,
+      evaluation::AlignmentModeName(o.alignment), r.alignment.scale, r.rpe.translation.rmse,
+      r.rpe.translation.mean, r.rpe.rotation_deg.rmse, r.rpe.rotation_deg.mean,
+      r.rpe.translation.count, o.rpe_delta.value,
+      o.rpe_delta.unit == evaluation::RpeDelta::Unit::kFrames ? "frames" : "m");
+}
+
+void WritePlot(const evaluation::EvaluationResult& r, const std::string& path) {
+  std::vector<Eigen::Vector3d> reference, estimate;
+  for (const auto& p : r.matched_reference) reference.push_back(p.pose.translation());
+  for (const auto& p : r.aligned_estimate) estimate.push_back(p.pose.translation());
+  evaluation::TopViewPlot plot;
+  plot.AddPath(reference, cv::Scalar(80, 80, 80), "ground truth", 3);
+  plot.AddPath(estimate, cv::Scalar(200, 90, 0), "estimate (aligned)", 2);
+  char title[128];
+  std::snprintf(title, sizeof(title), "ATE RMSE %.2f cm over %zu poses", r.ate.rmse * 100.0,
+                r.matched);
+  if (!cv::imwrite(path, plot.Render(cv::Size(900, 700), title))) {
+    throw std::runtime_error("cannot write plot " + path);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  evaluation::EvaluationOptions options;
+  std::string gt_path, est_path;
+  std::optional<tools::CommandLine> args;
+  try {
+    args.emplace(argc, argv,
+                 std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "plot",
+                                       "rpe-delta", "rpe-unit"},
+                 std::set<std::string>{"json", "help"});
+    if (args->Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (!args->Value("gt") || !args->Value("est") || !args->positional().empty()) {
+      throw std::invalid_argument("--gt and --est are required");
+    }
+    gt_path = *args->Value("gt");
+    est_path = *args->Value("est");
+    const auto alignment = evaluation::ParseAlignmentMode(args->ValueOr("align", "se3"));
+    if (!alignment) throw std::invalid_argument("--align must be se3, sim3 or none");
+    options.alignment = *alignment;
+    options.max_dt = args->NumberOr("max-dt", options.max_dt);
+    options.rpe_delta.value = args->NumberOr("rpe-delta", options.rpe_delta.value);
+    const std::string unit = args->ValueOr("rpe-unit", "frames");
+    if (unit != "frames" && unit != "m")
+      throw std::invalid_argument("--rpe-unit must be frames or m");
+    options.rpe_delta.unit =
+        unit == "m" ? evaluation::RpeDelta::Unit::kMeters : evaluation::RpeDelta::Unit::kFrames;
+  } catch (const std::invalid_argument& error) {
+    std::fprintf(stderr, "evaluate_trajectory: %s\n%s", error.what(), kUsage);
+    return 2;
+  }
+
+  try {
+    evaluation::Trajectory ground_truth = evaluation::ReadTrajectory(gt_path);
+    if (const auto sensor_yaml = args->Value("gt-to-camera")) {
+      const camera::CameraCalibration camera = camera::ReadEurocSensorYaml(*sensor_yaml);
+      ground_truth = evaluation::TransformToSensorFrame(ground_truth, camera.T_body_camera);
+    }
+    const evaluation::Trajectory estimate = evaluation::ReadTrajectory(est_path);
+    const evaluation::EvaluationResult result =
+        evaluation::EvaluateTrajectory(ground_truth, estimate, options);
+    if (args->Flag("json")) {
+      PrintJson(result, options);
+    } else {
+      PrintTable(result, options, gt_path, est_path);
+    }
+    if (const auto plot_path = args->Value("plot")) WritePlot(result, *plot_path);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "evaluate_trajectory: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}

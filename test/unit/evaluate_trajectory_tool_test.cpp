@@ -1,0 +1,123 @@
+// The evaluate_trajectory program, run as a user runs it.
+#include <regex>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "stereo_fabmap_slam/camera/camera_calibration.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
+#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+double JsonNumber(const std::string& json, const std::string& key) {
+  const std::regex pattern("\"" + key + "\": ([-0-9.eE+]+)");
+  std::smatch match;
+  if (!std::regex_search(json, match, pattern)) {
+    ADD_FAILURE() << key << " not in " << json;
+    return -1;
+  }
+  return std::stod(match[1]);
+}
+
+class EvaluateTrajectoryTool : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string mav0 = EurocSequencePath("MH01_first10s") + "/mav0";
+    gt_path_ = mav0 + "/state_groundtruth_estimate0/data.csv";
+    sensor_yaml_ = mav0 + "/cam0/sensor.yaml";
+    // An "estimate": the left camera's true path at the ground-truth stamps nearest the images,
+    // 20 cm off, which SE(3) alignment removes exactly.
+    const io::EurocSequence sequence = io::EurocSequence::Open(mav0);
+    const evaluation::Trajectory camera_truth = evaluation::TransformToSensorFrame(
+        sequence.ground_truth(), sequence.calibration().left.T_body_camera);
+    std::size_t k = 0;
+    for (const io::StereoFrameEntry& frame : sequence.frames()) {
+      const double t = frame.timestamp_ns * 1e-9;
+      while (k + 1 < camera_truth.size() && camera_truth[k + 1].timestamp <= t) ++k;
+      evaluation::StampedPose pose = camera_truth[k];
+      pose.pose.translation() += Eigen::Vector3d(0.2, 0.0, 0.0);
+      estimate_.push_back(pose);
+    }
+    est_path_ = temp_.path() + "/estimate.txt";
+    evaluation::WriteTumTrajectory(estimate_, est_path_);
+    camera_truth_ = camera_truth;
+  }
+
+  std::string Run(const std::string& arguments, int* status) {
+    std::string output;
+    *status = RunCommand(std::string(EVALUATE_TRAJECTORY_BIN) + " " + arguments + " 2>&1", &output);
+    return output;
+  }
+
+  TemporaryDirectory temp_;
+  std::string gt_path_, sensor_yaml_, est_path_;
+  evaluation::Trajectory estimate_, camera_truth_;
+};
+
+TEST_F(EvaluateTrajectoryTool, JsonMatchesTheLibrary) {
+  int status = -1;
+  const std::string json = Run(
+      "--gt " + gt_path_ + " --est " + est_path_ + " --gt-to-camera " + sensor_yaml_ + " --json",
+      &status);
+  ASSERT_EQ(status, 0) << json;
+  const evaluation::EvaluationResult expected =
+      evaluation::EvaluateTrajectory(camera_truth_, evaluation::ReadTrajectory(est_path_), {});
+  EXPECT_EQ(JsonNumber(json, "matched"), 200);
+  EXPECT_NEAR(JsonNumber(json, "ate_rmse"), expected.ate.rmse, 1e-8);
+  EXPECT_NEAR(JsonNumber(json, "ate_max"), expected.ate.max, 1e-8);
+  EXPECT_NEAR(JsonNumber(json, "rpe_trans_rmse"), expected.rpe.translation.rmse, 1e-8);
+  for (const std::string key : {"ate_mean", "ate_median", "rpe_rot_rmse_deg"})
+    JsonNumber(json, key);
+  // The constant offset is removed by alignment; what remains is the files' 9 decimals.
+  EXPECT_LT(JsonNumber(json, "ate_rmse"), 1e-7);
+}
+
+TEST_F(EvaluateTrajectoryTool, GroundTruthInTheWrongFrameIsWorse) {
+  int status = -1;
+  const std::string json = Run("--gt " + gt_path_ + " --est " + est_path_ + " --json", &status);
+  ASSERT_EQ(status, 0) << json;
+  // Body and camera are ~7 cm apart and the camera rotates: comparing positions of different
+  // frames leaves an error no rigid alignment removes (here several millimetres).
+  EXPECT_GT(JsonNumber(json, "ate_rmse"), 0.002);
+}
+
+TEST_F(EvaluateTrajectoryTool, TableAndPlot) {
+  int status = -1;
+  const std::string plot = temp_.path() + "/plot.png";
+  const std::string table = Run("--gt " + gt_path_ + " --est " + est_path_ + " --gt-to-camera " +
+                                    sensor_yaml_ + " --align sim3 --plot " + plot,
+                                &status);
+  ASSERT_EQ(status, 0) << table;
+  EXPECT_NE(table.find("ATE [cm]"), std::string::npos) << table;
+  EXPECT_NE(table.find("sim3"), std::string::npos) << table;
+  const cv::Mat image = cv::imread(plot);
+  ASSERT_FALSE(image.empty());
+  EXPECT_EQ(image.size(), cv::Size(900, 700));
+}
+
+TEST_F(EvaluateTrajectoryTool, BadArgumentsAndFiles) {
+  int status = -1;
+  Run("--gt " + gt_path_, &status);
+  EXPECT_EQ(status, 2);
+  Run("--gt " + gt_path_ + " --est " + est_path_ + " --align affine", &status);
+  EXPECT_EQ(status, 2);
+  const std::string message =
+      Run("--gt " + gt_path_ + " --est " + temp_.path() + "/none.txt", &status);
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(message.find("none.txt: cannot open file"), std::string::npos) << message;
+  // Stamps that never meet: a clear message, not a crash.
+  evaluation::Trajectory shifted = estimate_;
+  for (auto& p : shifted) p.timestamp += 1000.0;
+  evaluation::WriteTumTrajectory(shifted, est_path_);
+  const std::string no_match = Run("--gt " + gt_path_ + " --est " + est_path_, &status);
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(no_match.find("have a reference pose within"), std::string::npos) << no_match;
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test

@@ -1,0 +1,76 @@
+#include "test_support.h"
+
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace stereo_fabmap_slam::test {
+
+std::string RepositoryRoot() { return STEREO_FABMAP_SLAM_REPO_ROOT; }
+
+std::string DataRoot() {
+  const char* from_environment = std::getenv("STEREO_FABMAP_SLAM_DATA");
+  if (from_environment != nullptr && *from_environment != '\0') return from_environment;
+  return RepositoryRoot() + "/../shared/data";
+}
+
+std::string EurocSequencePath(const std::string& name) {
+  const std::string path = DataRoot() + "/euroc/" + name;
+  if (!std::filesystem::is_directory(path)) {
+    throw std::runtime_error("test data missing: " + path +
+                             " (set STEREO_FABMAP_SLAM_DATA to the shared data folder)");
+  }
+  return path;
+}
+
+TemporaryDirectory::TemporaryDirectory() {
+  std::string pattern = (std::filesystem::temp_directory_path() / "sfs_test_XXXXXX").string();
+  if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  path_ = pattern;
+}
+
+TemporaryDirectory::~TemporaryDirectory() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
+}
+
+void WriteTextFile(const std::string& path, const std::string& text) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  std::ofstream file(path);
+  file << text;
+  if (!file) throw std::runtime_error("cannot write " + path);
+}
+
+std::string ReadTextFile(const std::string& path) {
+  std::ifstream file(path);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+bool CopyTree(const std::string& from, const std::string& to) {
+  std::error_code error;
+  std::filesystem::copy(from, to, std::filesystem::copy_options::recursive, error);
+  return !error;
+}
+
+int RunCommand(const std::string& command, std::string* output) {
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return -1;
+  std::array<char, 4096> buffer;
+  output->clear();
+  std::size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    output->append(buffer.data(), n);
+  const int status = pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace stereo_fabmap_slam::test

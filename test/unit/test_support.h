@@ -1,0 +1,34 @@
+#pragma once
+
+#include <string>
+
+namespace stereo_fabmap_slam::test {
+
+// Root of the shared test data: $STEREO_FABMAP_SLAM_DATA, or ../shared/data beside the repository.
+std::string DataRoot();
+// An EuRoC sequence under DataRoot()/euroc; fails the calling test if it is missing.
+std::string EurocSequencePath(const std::string& name);
+std::string RepositoryRoot();
+
+// A fresh, empty folder removed again when the object goes out of scope.
+class TemporaryDirectory {
+ public:
+  TemporaryDirectory();
+  ~TemporaryDirectory();
+  TemporaryDirectory(const TemporaryDirectory&) = delete;
+  TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+// Writes `text` to `path` (creating parent folders).
+void WriteTextFile(const std::string& path, const std::string& text);
+std::string ReadTextFile(const std::string& path);
+// Copies a folder tree (cp -r); returns false on failure.
+bool CopyTree(const std::string& from, const std::string& to);
+// Runs a shell command, returns its exit status and fills *output with stdout.
+int RunCommand(const std::string& command, std::string* output);
+
+}  // namespace stereo_fabmap_slam::test
