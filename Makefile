@@ -24,6 +24,8 @@ DEBIAN_PACKAGES := \
   libmessage-filters-dev librosbag-dev python3-rosbag python3-rostest \
   libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev libvisualization-msgs-dev \
   libstd-srvs-dev \
+  python3-sensor-msgs python3-geometry-msgs python3-nav-msgs python3-visualization-msgs \
+  python3-std-srvs python3-tf2-msgs \
   libceres-dev libopencv-dev libopencv-contrib-dev libeigen3-dev libyaml-cpp-dev \
   googletest opencv-doc
 

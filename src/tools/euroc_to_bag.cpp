@@ -22,24 +22,34 @@ constexpr char kUsage[] =
     "cam1) and, when ASL_DIR has ground truth, /ground_truth (geometry_msgs/PoseStamped, body\n"
     "frame in 'world').\n";
 
+void WriteGroundTruth(const evaluation::StampedPose& body, rosbag::Bag* bag) {
+  geometry_msgs::PoseStamped message;
+  message.header.stamp.fromSec(body.timestamp);
+  message.header.frame_id = "world";
+  message.pose = ros_conversions::ToPoseMessage(body.pose);
+  bag->write("/ground_truth", message.header.stamp, message);
+}
+
+// Writes messages in time order, as a recorded bag has them: ground truth runs at 200 Hz and
+// starts before the first image and ends after the last.
 void WriteBag(const io::EurocSequence& sequence, const std::string& bag_path) {
   rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
+  const evaluation::Trajectory& truth = sequence.ground_truth();
+  std::size_t next_truth = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const io::StereoImages images = sequence.LoadStereoPair(i);
     const ros::Time stamp = ros_conversions::ToRosTime(images.timestamp_ns);
+    for (; next_truth < truth.size() && truth[next_truth].timestamp <= stamp.toSec();
+         ++next_truth) {
+      WriteGroundTruth(truth[next_truth], &bag);
+    }
     bag.write("/cam0/image_raw", stamp,
               ros_conversions::ToMono8ImageMessage(images.left, stamp, "cam0"));
     bag.write("/cam1/image_raw", stamp,
               ros_conversions::ToMono8ImageMessage(images.right, stamp, "cam1"));
     if ((i + 1) % 500 == 0) std::fprintf(stderr, "  %zu / %zu frames\n", i + 1, sequence.size());
   }
-  for (const evaluation::StampedPose& body : sequence.ground_truth()) {
-    geometry_msgs::PoseStamped message;
-    message.header.stamp.fromSec(body.timestamp);
-    message.header.frame_id = "world";
-    message.pose = ros_conversions::ToPoseMessage(body.pose);
-    bag.write("/ground_truth", message.header.stamp, message);
-  }
+  for (; next_truth < truth.size(); ++next_truth) WriteGroundTruth(truth[next_truth], &bag);
   bag.close();
 }
 
