@@ -2,6 +2,7 @@
 #   make demo   install what is missing, build, run the demo
 #   make test   install what is missing, build, run every test (gtest + rostest)
 #   make build  build only; every tool is then build/bin/<tool>
+# Use the ROS side (roslaunch, rosrun, nodelets) after `source build/ws/devel/setup.bash`.
 SHELL := /bin/bash
 .DEFAULT_GOAL := build
 
@@ -18,7 +19,7 @@ SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 # Debian 12 packages the package builds and tests with (ROS 1 from Debian itself).
 DEBIAN_PACKAGES := \
   build-essential cmake catkin python3-catkin-pkg \
-  ros-core-dev libroscpp-dev ros-message-generation \
+  ros-core-dev libroscpp-dev ros-message-generation rosbash \
   libnodeletlib-dev libnodeletlib-tools libnodelet-dev pluginlib-dev \
   libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev \
   libmessage-filters-dev librosbag-dev python3-rosbag python3-rostest \
@@ -29,9 +30,12 @@ DEBIAN_PACKAGES := \
   libceres-dev libopencv-dev libopencv-contrib-dev libeigen3-dev libyaml-cpp-dev \
   googletest opencv-doc
 
-CATKIN_MAKE := catkin_make -C $(WS) \
-  -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-  -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
+# The repository is a single catkin package, built standalone by CMake: build tree in
+# build/ws/build, devel space (setup.bash, libraries, messages) in build/ws/devel. No src/ link
+# back to the repository, which would make a cycle for rospack and roslaunch to crawl.
+CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+  -DCATKIN_DEVEL_PREFIX=$(WS)/devel -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
+CMAKE_BUILD := cmake --build $(WS)/build --
 
 .PHONY: deps build test demo clean format
 
@@ -45,19 +49,19 @@ deps:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
 	fi
 
-$(WS)/src/stereo_fabmap_slam:
-	mkdir -p $(WS)/src
-	ln -sfn $(REPO) $@
+$(WS)/build/Makefile:
+	cmake -S $(REPO) -B $(WS)/build $(CMAKE_ARGS)
 
-build: deps $(WS)/src/stereo_fabmap_slam
-	$(CATKIN_MAKE) -j$(JOBS)
+# Later builds re-run CMake by themselves when a CMakeLists.txt or package.xml changes.
+build: deps $(WS)/build/Makefile
+	$(CMAKE_BUILD) -j$(JOBS)
 
 # Builds the test programs in parallel, then runs them one at a time (each rostest starts its
 # own master) and closes with one line "tests: N passed, N failed, N skipped".
 test: build
-	$(CATKIN_MAKE) -j$(JOBS) tests
+	$(CMAKE_BUILD) -j$(JOBS) tests
 	rm -rf $(WS)/build/test_results
-	$(CATKIN_MAKE) -j1 run_tests
+	$(CMAKE_BUILD) -j1 run_tests
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
 
 demo: build

@@ -4,6 +4,9 @@
 Prints every failed case with its message, then one closing line
 "tests: N passed, N failed, N skipped"; exits 1 if any failed or if no test ran at all.
 (catkin_test_results counts each gtest case twice, once for its suite and once for the file.)
+A rostest leaves two files: rosunit-*.xml with the cases of its test node, and rostest-*.xml
+with one wrapper case that fails only if the node crashed or left no results; the wrapper counts
+only when it fails, so that a passing case is not counted twice.
 """
 import pathlib
 import sys
@@ -27,7 +30,7 @@ def main(results_dir):
                 failed.append(f"{path.name}: {name}: {message.splitlines()[0] if message else ''}")
             elif case.find("skipped") is not None or case.get("status") == "notrun":
                 skipped += 1
-            else:
+            elif not path.name.startswith("rostest-"):
                 passed += 1
     for line in failed:
         print(f"FAILED {line}")
