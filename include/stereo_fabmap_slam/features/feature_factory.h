@@ -1,0 +1,28 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/features2d.hpp>
+
+#include "stereo_fabmap_slam/features/feature_options.h"
+
+namespace stereo_fabmap_slam::features {
+
+// Names this build of OpenCV provides (FREAK, BRIEF and DAISY need opencv_xfeatures2d, which
+// Debian's OpenCV does not ship).
+std::vector<std::string> AvailableDetectors();
+std::vector<std::string> AvailableDescriptors();
+
+// A descriptor extractor with how its descriptors compare.
+struct DescriptorKind {
+  cv::Ptr<cv::DescriptorExtractor> extractor;
+  int norm = cv::NORM_HAMMING;    // NORM_HAMMING for binary descriptors, NORM_L2 for float ones
+  double max_match_distance = 0;  // beyond this two descriptors are never the same point
+};
+
+// Throw std::invalid_argument with the list of available names for an unknown or unavailable one.
+cv::Ptr<cv::FeatureDetector> CreateDetector(const FeatureOptions& options);
+DescriptorKind CreateDescriptor(const FeatureOptions& options);
+
+}  // namespace stereo_fabmap_slam::features

@@ -1,0 +1,53 @@
+#pragma once
+
+#include <vector>
+
+#include <opencv2/features2d.hpp>
+
+#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/features/adaptive_detector.h"
+#include "stereo_fabmap_slam/features/feature_factory.h"
+#include "stereo_fabmap_slam/features/feature_options.h"
+#include "stereo_fabmap_slam/features/stereo_features.h"
+#include "stereo_fabmap_slam/features/stereo_matcher.h"
+
+namespace stereo_fabmap_slam::features {
+
+// From a rectified stereo pair to StereoFeatures, in three stages that callers may time apart:
+// detection (+ ANMS on the left, strongest on the right; the right image on a second thread if
+// parallel), description (left; right only for descriptor stereo matching), stereo matching and
+// triangulation. Detection adapts its threshold per stream, so one extractor serves one camera
+// pair in time order.
+class StereoFeatureExtractor {
+ public:
+  struct Detected {
+    std::vector<cv::KeyPoint> left, right;
+  };
+  struct Described {
+    std::vector<cv::KeyPoint> left, right;
+    cv::Mat left_descriptors, right_descriptors;
+  };
+
+  // Throws std::invalid_argument for bad options or an unknown detector/descriptor.
+  StereoFeatureExtractor(const FeatureOptions& feature_options,
+                         const StereoMatcherOptions& stereo_options,
+                         const camera::StereoCamera& camera);
+
+  Detected Detect(const cv::Mat& left, const cv::Mat& right);
+  Described Describe(const cv::Mat& left, const cv::Mat& right, Detected detected) const;
+  StereoFeatures Match(const cv::Mat& left, const cv::Mat& right, Described described) const;
+  StereoFeatures Extract(const cv::Mat& left, const cv::Mat& right);
+
+  int descriptor_norm() const { return descriptor_.norm; }
+  double max_match_distance() const { return descriptor_.max_match_distance; }
+  const camera::StereoCamera& camera() const { return camera_; }
+
+ private:
+  FeatureOptions options_;
+  camera::StereoCamera camera_;
+  AdaptiveDetector left_detector_, right_detector_;
+  DescriptorKind descriptor_;
+  StereoMatcher matcher_;
+};
+
+}  // namespace stereo_fabmap_slam::features

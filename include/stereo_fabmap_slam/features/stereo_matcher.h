@@ -1,0 +1,69 @@
+#pragma once
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
+
+namespace stereo_fabmap_slam::features {
+
+struct StereoMatcherOptions {
+  // "patch": right candidates are compared with the left key point by zero-mean normalised
+  // cross-correlation of image patches, so the right image needs no descriptors (fast);
+  // "descriptor": by descriptor distance (the right key points are described too).
+  std::string mode = "patch";
+  double max_patch_distance = 0.3;  // patch mode: 1 - NCC of a match must stay below this
+  double max_row_difference = 2.0;  // [px] rectified rows of a match may differ this much
+  double max_disparity = 150.0;     // [px] closest points (~0.3 m on EuRoC)
+  double ratio = 0.8;               // best distance / second best must stay below this
+  double min_depth = 0.2;           // [m]
+  double max_depth = 25.0;          // [m] farther points triangulate too poorly to keep
+  bool subpixel = true;             // refine the right column by patch correlation
+  int patch_radius = 5;             // [px] half side of the correlation patch
+  int search_radius = 3;            // [px] columns searched either side of the matched key point
+
+  void Load(io::OptionReader& reader);
+  void Validate() const;
+};
+
+std::ostream& operator<<(std::ostream& out, const StereoMatcherOptions& options);
+
+// Matches left key points to right key points of a rectified pair: candidates lie on the same
+// row band and within the disparity range; the best distance (patch or descriptor) must be below
+// a limit and clearly better than the second best (ratio test); the right column is then refined
+// to a fraction of a pixel by sum-of-absolute-differences correlation along the row and a
+// parabola through the best three offsets.
+class StereoMatcher {
+ public:
+  StereoMatcher(const StereoMatcherOptions& options, const camera::StereoCamera& camera, int norm,
+                double max_descriptor_distance);
+
+  bool uses_descriptors() const { return options_.mode == "descriptor"; }
+
+  // For each left key point, the right column of its match, or -1 (no match, or a depth outside
+  // [min_depth, max_depth]). right_descriptors are needed in descriptor mode only.
+  std::vector<float> Match(const cv::Mat& left_image, const std::vector<cv::KeyPoint>& left,
+                           const cv::Mat& left_descriptors, const cv::Mat& right_image,
+                           const std::vector<cv::KeyPoint>& right,
+                           const cv::Mat& right_descriptors) const;
+
+ private:
+  // 1 - zero-mean NCC of the patches around two integer pixels, or 2 if a patch leaves an image.
+  double PatchDistance(const cv::Mat& left_image, const cv::Point& left, const cv::Mat& right_image,
+                       const cv::Point& right) const;
+  // Sub-pixel right column around a key-point match, or a negative value if the correlation has
+  // no clear minimum inside the search window.
+  float RefineColumn(const cv::Mat& left_image, const cv::Point2f& left_point,
+                     const cv::Mat& right_image, float right_column) const;
+
+  StereoMatcherOptions options_;
+  camera::StereoCamera camera_;
+  int norm_;
+  double max_descriptor_distance_;
+};
+
+}  // namespace stereo_fabmap_slam::features

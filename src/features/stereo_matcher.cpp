@@ -1,0 +1,179 @@
+#include "stereo_fabmap_slam/features/stereo_matcher.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace stereo_fabmap_slam::features {
+
+void StereoMatcherOptions::Load(io::OptionReader& reader) {
+  reader.Read("mode", &mode);
+  reader.Read("max_patch_distance", &max_patch_distance);
+  reader.Read("max_row_difference", &max_row_difference);
+  reader.Read("max_disparity", &max_disparity);
+  reader.Read("ratio", &ratio);
+  reader.Read("min_depth", &min_depth);
+  reader.Read("max_depth", &max_depth);
+  reader.Read("subpixel", &subpixel);
+  reader.Read("patch_radius", &patch_radius);
+  reader.Read("search_radius", &search_radius);
+}
+
+void StereoMatcherOptions::Validate() const {
+  if (mode != "patch" && mode != "descriptor") {
+    throw std::invalid_argument("stereo.mode must be 'patch' or 'descriptor', not '" + mode + "'");
+  }
+  if (!(max_patch_distance > 0 && max_patch_distance <= 2)) {
+    throw std::invalid_argument("stereo.max_patch_distance must lie in (0, 2]");
+  }
+  if (!(max_row_difference >= 0))
+    throw std::invalid_argument("stereo.max_row_difference must be >= 0");
+  if (!(max_disparity > 0)) throw std::invalid_argument("stereo.max_disparity must be > 0");
+  if (!(ratio > 0 && ratio <= 1)) throw std::invalid_argument("stereo.ratio must lie in (0, 1]");
+  if (!(min_depth > 0 && max_depth > min_depth)) {
+    throw std::invalid_argument("stereo depths need 0 < min_depth < max_depth");
+  }
+  if (patch_radius < 1 || search_radius < 1) {
+    throw std::invalid_argument("stereo.patch_radius and search_radius must be >= 1");
+  }
+}
+
+std::ostream& operator<<(std::ostream& out, const StereoMatcherOptions& o) {
+  return out << "stereo: mode " << o.mode << " (max patch distance " << o.max_patch_distance
+             << "), max_row_difference " << o.max_row_difference << " px, max_disparity "
+             << o.max_disparity << " px, ratio " << o.ratio << ", depth [" << o.min_depth << ", "
+             << o.max_depth << "] m, subpixel " << (o.subpixel ? "on" : "off") << " (patch radius "
+             << o.patch_radius << ", search radius " << o.search_radius << ")";
+}
+
+StereoMatcher::StereoMatcher(const StereoMatcherOptions& options,
+                             const camera::StereoCamera& camera, int norm,
+                             double max_descriptor_distance)
+    : options_(options),
+      camera_(camera),
+      norm_(norm),
+      max_descriptor_distance_(max_descriptor_distance) {
+  options_.Validate();
+}
+
+std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
+                                        const std::vector<cv::KeyPoint>& left,
+                                        const cv::Mat& left_descriptors, const cv::Mat& right_image,
+                                        const std::vector<cv::KeyPoint>& right,
+                                        const cv::Mat& right_descriptors) const {
+  // Right key points by image row, so that each left point looks only at its row band.
+  const int rows = right_image.rows;
+  std::vector<std::vector<int>> by_row(static_cast<std::size_t>(rows));
+  const int band = static_cast<int>(std::ceil(options_.max_row_difference));
+  for (int j = 0; j < static_cast<int>(right.size()); ++j) {
+    const int row = static_cast<int>(std::lround(right[j].pt.y));
+    for (int r = std::max(0, row - band); r <= std::min(rows - 1, row + band); ++r) {
+      by_row[static_cast<std::size_t>(r)].push_back(j);
+    }
+  }
+  const double min_disparity = camera_.fx * camera_.baseline / options_.max_depth;
+  const double max_disparity =
+      std::min(options_.max_disparity, camera_.fx * camera_.baseline / options_.min_depth);
+
+  std::vector<float> u_right(left.size(), -1.0f);
+  for (int i = 0; i < static_cast<int>(left.size()); ++i) {
+    const cv::Point2f& p = left[i].pt;
+    const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, rows - 1);
+    double best = std::numeric_limits<double>::max(), second = best;
+    int best_j = -1;
+    for (const int j : by_row[static_cast<std::size_t>(row)]) {
+      const cv::Point2f& q = right[j].pt;
+      const double disparity = p.x - q.x;
+      if (std::abs(q.y - p.y) > options_.max_row_difference || disparity < 0 ||
+          disparity > max_disparity + options_.search_radius) {
+        continue;
+      }
+      const double distance =
+          uses_descriptors()
+              ? cv::norm(left_descriptors.row(i), right_descriptors.row(j), norm_)
+              : PatchDistance(left_image, cv::Point(static_cast<int>(std::lround(p.x)), row),
+                              right_image,
+                              cv::Point(static_cast<int>(std::lround(q.x)),
+                                        static_cast<int>(std::lround(q.y))));
+      if (distance < best) {
+        second = best;
+        best = distance;
+        best_j = j;
+      } else if (distance < second) {
+        second = distance;
+      }
+    }
+    const double limit =
+        uses_descriptors() ? max_descriptor_distance_ : options_.max_patch_distance;
+    if (best_j < 0 || best > limit || best > options_.ratio * second) continue;
+    float column = right[best_j].pt.x;
+    if (options_.subpixel) column = RefineColumn(left_image, p, right_image, column);
+    if (column < 0) continue;
+    const double disparity = p.x - column;
+    if (disparity >= min_disparity && disparity <= max_disparity) u_right[i] = column;
+  }
+  return u_right;
+}
+
+double StereoMatcher::PatchDistance(const cv::Mat& left_image, const cv::Point& left,
+                                    const cv::Mat& right_image, const cv::Point& right) const {
+  const int r = options_.patch_radius;
+  const cv::Rect inside(r, r, left_image.cols - 2 * r, left_image.rows - 2 * r);
+  if (!inside.contains(left) || !inside.contains(right)) return 2.0;
+  double sum_l = 0, sum_r = 0, sum_ll = 0, sum_rr = 0, sum_lr = 0;
+  for (int dy = -r; dy <= r; ++dy) {
+    const std::uint8_t* l = left_image.ptr<std::uint8_t>(left.y + dy) + left.x - r;
+    const std::uint8_t* q = right_image.ptr<std::uint8_t>(right.y + dy) + right.x - r;
+    for (int dx = 0; dx <= 2 * r; ++dx) {
+      const double a = l[dx], b = q[dx];
+      sum_l += a;
+      sum_r += b;
+      sum_ll += a * a;
+      sum_rr += b * b;
+      sum_lr += a * b;
+    }
+  }
+  const double n = (2 * r + 1) * (2 * r + 1);
+  const double var_l = sum_ll - sum_l * sum_l / n, var_r = sum_rr - sum_r * sum_r / n;
+  if (var_l < n || var_r < n) return 2.0;  // flat patch (std below 1 grey level): no information
+  return 1.0 - (sum_lr - sum_l * sum_r / n) / std::sqrt(var_l * var_r);
+}
+
+float StereoMatcher::RefineColumn(const cv::Mat& left_image, const cv::Point2f& left_point,
+                                  const cv::Mat& right_image, float right_column) const {
+  const int r = options_.patch_radius, search = options_.search_radius;
+  const int ul = static_cast<int>(std::lround(left_point.x));
+  const int v = static_cast<int>(std::lround(left_point.y));
+  const int ur = static_cast<int>(std::lround(right_column));
+  if (v - r < 0 || v + r >= left_image.rows || ul - r < 0 || ul + r >= left_image.cols ||
+      ur - r - search - 1 < 0 || ur + r + search + 1 >= right_image.cols) {
+    return -1.0f;
+  }
+  // Patches minus their centre value, so that a brightness offset between cameras cancels.
+  const int left_centre = left_image.at<std::uint8_t>(v, ul);
+  std::vector<int> costs;
+  for (int offset = -search - 1; offset <= search + 1; ++offset) {
+    const int right_centre = right_image.at<std::uint8_t>(v, ur + offset);
+    int cost = 0;
+    for (int dy = -r; dy <= r; ++dy) {
+      const std::uint8_t* left_row = left_image.ptr<std::uint8_t>(v + dy) + ul - r;
+      const std::uint8_t* right_row = right_image.ptr<std::uint8_t>(v + dy) + ur + offset - r;
+      for (int dx = 0; dx <= 2 * r; ++dx) {
+        cost += std::abs((left_row[dx] - left_centre) - (right_row[dx] - right_centre));
+      }
+    }
+    costs.push_back(cost);
+  }
+  // Best offset strictly inside the window, so that both neighbours exist for the parabola.
+  int best = 1;
+  for (int k = 1; k < static_cast<int>(costs.size()) - 1; ++k) {
+    if (costs[k] < costs[best]) best = k;
+  }
+  if (costs[best - 1] <= costs[best] || costs[best + 1] <= costs[best]) return -1.0f;
+  const double before = costs[best - 1], here = costs[best], after = costs[best + 1];
+  const double delta = (before - after) / (2.0 * (before + after - 2.0 * here));
+  if (std::abs(delta) > 1.0) return -1.0f;
+  return static_cast<float>(ur + (best - search - 1) + delta);
+}
+
+}  // namespace stereo_fabmap_slam::features
