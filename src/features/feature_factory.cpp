@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include <opencv2/core/hal/hal.hpp>
+
 #if __has_include(<opencv2/xfeatures2d.hpp>)
 #include <opencv2/xfeatures2d.hpp>
 #define STEREO_FABMAP_SLAM_HAVE_XFEATURES2D 1
@@ -17,6 +19,13 @@ std::string JoinNames(const std::vector<std::string>& names) {
 }
 
 }  // namespace
+
+double DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j, int norm) {
+  if (norm == cv::NORM_HAMMING) {
+    return cv::hal::normHamming(a.ptr<std::uint8_t>(i), b.ptr<std::uint8_t>(j), a.cols);
+  }
+  return cv::norm(a.row(i), b.row(j), norm);
+}
 
 std::vector<std::string> AvailableDetectors() { return {"AGAST", "FAST", "ORB", "AKAZE", "SIFT"}; }
 

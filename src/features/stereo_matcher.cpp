@@ -1,22 +1,25 @@
 #include "stereo_fabmap_slam/features/stereo_matcher.h"
 
+#include "stereo_fabmap_slam/features/feature_factory.h"
+
 #include <cmath>
+#include <future>
 #include <limits>
 #include <stdexcept>
 
 namespace stereo_fabmap_slam::features {
 
-void StereoMatcherOptions::Load(io::OptionReader& reader) {
-  reader.Read("mode", &mode);
-  reader.Read("max_patch_distance", &max_patch_distance);
-  reader.Read("max_row_difference", &max_row_difference);
-  reader.Read("max_disparity", &max_disparity);
-  reader.Read("ratio", &ratio);
-  reader.Read("min_depth", &min_depth);
-  reader.Read("max_depth", &max_depth);
-  reader.Read("subpixel", &subpixel);
-  reader.Read("patch_radius", &patch_radius);
-  reader.Read("search_radius", &search_radius);
+void StereoMatcherOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("mode", &mode);
+  visitor.Visit("max_patch_distance", &max_patch_distance);
+  visitor.Visit("max_row_difference", &max_row_difference);
+  visitor.Visit("max_disparity", &max_disparity);
+  visitor.Visit("ratio", &ratio);
+  visitor.Visit("min_depth", &min_depth);
+  visitor.Visit("max_depth", &max_depth);
+  visitor.Visit("subpixel", &subpixel);
+  visitor.Visit("patch_radius", &patch_radius);
+  visitor.Visit("search_radius", &search_radius);
 }
 
 void StereoMatcherOptions::Validate() const {
@@ -38,21 +41,14 @@ void StereoMatcherOptions::Validate() const {
   }
 }
 
-std::ostream& operator<<(std::ostream& out, const StereoMatcherOptions& o) {
-  return out << "stereo: mode " << o.mode << " (max patch distance " << o.max_patch_distance
-             << "), max_row_difference " << o.max_row_difference << " px, max_disparity "
-             << o.max_disparity << " px, ratio " << o.ratio << ", depth [" << o.min_depth << ", "
-             << o.max_depth << "] m, subpixel " << (o.subpixel ? "on" : "off") << " (patch radius "
-             << o.patch_radius << ", search radius " << o.search_radius << ")";
-}
-
 StereoMatcher::StereoMatcher(const StereoMatcherOptions& options,
                              const camera::StereoCamera& camera, int norm,
-                             double max_descriptor_distance)
+                             double max_descriptor_distance, bool parallel)
     : options_(options),
       camera_(camera),
       norm_(norm),
-      max_descriptor_distance_(max_descriptor_distance) {
+      max_descriptor_distance_(max_descriptor_distance),
+      parallel_(parallel) {
   options_.Validate();
 }
 
@@ -76,41 +72,52 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
       std::min(options_.max_disparity, camera_.fx * camera_.baseline / options_.min_depth);
 
   std::vector<float> u_right(left.size(), -1.0f);
-  for (int i = 0; i < static_cast<int>(left.size()); ++i) {
-    const cv::Point2f& p = left[i].pt;
-    const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, rows - 1);
-    double best = std::numeric_limits<double>::max(), second = best;
-    int best_j = -1;
-    for (const int j : by_row[static_cast<std::size_t>(row)]) {
-      const cv::Point2f& q = right[j].pt;
-      const double disparity = p.x - q.x;
-      if (std::abs(q.y - p.y) > options_.max_row_difference || disparity < 0 ||
-          disparity > max_disparity + options_.search_radius) {
-        continue;
+  // Each left key point is matched on its own: two halves on two threads, same result.
+  const auto match_range = [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      const cv::Point2f& p = left[i].pt;
+      const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, rows - 1);
+      double best = std::numeric_limits<double>::max(), second = best;
+      int best_j = -1;
+      for (const int j : by_row[static_cast<std::size_t>(row)]) {
+        const cv::Point2f& q = right[j].pt;
+        const double disparity = p.x - q.x;
+        if (std::abs(q.y - p.y) > options_.max_row_difference || disparity < 0 ||
+            disparity > max_disparity + options_.search_radius) {
+          continue;
+        }
+        const double distance =
+            uses_descriptors()
+                ? DescriptorDistance(left_descriptors, i, right_descriptors, j, norm_)
+                : PatchDistance(left_image, cv::Point(static_cast<int>(std::lround(p.x)), row),
+                                right_image,
+                                cv::Point(static_cast<int>(std::lround(q.x)),
+                                          static_cast<int>(std::lround(q.y))));
+        if (distance < best) {
+          second = best;
+          best = distance;
+          best_j = j;
+        } else if (distance < second) {
+          second = distance;
+        }
       }
-      const double distance =
-          uses_descriptors()
-              ? cv::norm(left_descriptors.row(i), right_descriptors.row(j), norm_)
-              : PatchDistance(left_image, cv::Point(static_cast<int>(std::lround(p.x)), row),
-                              right_image,
-                              cv::Point(static_cast<int>(std::lround(q.x)),
-                                        static_cast<int>(std::lround(q.y))));
-      if (distance < best) {
-        second = best;
-        best = distance;
-        best_j = j;
-      } else if (distance < second) {
-        second = distance;
-      }
+      const double limit =
+          uses_descriptors() ? max_descriptor_distance_ : options_.max_patch_distance;
+      if (best_j < 0 || best > limit || best > options_.ratio * second) continue;
+      float column = right[best_j].pt.x;
+      if (options_.subpixel) column = RefineColumn(left_image, p, right_image, column);
+      if (column < 0) continue;
+      const double disparity = p.x - column;
+      if (disparity >= min_disparity && disparity <= max_disparity) u_right[i] = column;
     }
-    const double limit =
-        uses_descriptors() ? max_descriptor_distance_ : options_.max_patch_distance;
-    if (best_j < 0 || best > limit || best > options_.ratio * second) continue;
-    float column = right[best_j].pt.x;
-    if (options_.subpixel) column = RefineColumn(left_image, p, right_image, column);
-    if (column < 0) continue;
-    const double disparity = p.x - column;
-    if (disparity >= min_disparity && disparity <= max_disparity) u_right[i] = column;
+  };
+  const int count = static_cast<int>(left.size());
+  if (parallel_) {
+    std::future<void> worker = std::async(std::launch::async, match_range, count / 2, count);
+    match_range(0, count / 2);
+    worker.get();
+  } else {
+    match_range(0, count);
   }
   return u_right;
 }

@@ -4,25 +4,26 @@
 
 namespace stereo_fabmap_slam::io {
 
-OptionReader::OptionReader(const YamlFile& file, const YAML::Node& node, std::string section)
+YamlOptionReader::YamlOptionReader(const YamlFile& file, const YAML::Node& node,
+                                   std::string section)
     : file_(file), node_(node), section_(std::move(section)) {
   if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap()) {
     throw FileError(file_.source(), node_.Mark().line + 1, "'" + section_ + "' must be a mapping");
   }
 }
 
-std::optional<YAML::Node> OptionReader::Find(const std::string& key) {
+std::optional<YAML::Node> YamlOptionReader::Find(const std::string& key) {
   known_.insert(key);
   if (!node_.IsMap() || !node_[key].IsDefined()) return std::nullopt;
   return node_[key];
 }
 
-void OptionReader::Fail(const std::string& key, const char* expected) const {
+void YamlOptionReader::Fail(const std::string& key, const char* expected) const {
   throw FileError(file_.source(), node_[key].Mark().line + 1,
                   section_ + "." + key + " must be " + expected);
 }
 
-void OptionReader::Read(const std::string& key, double* value) {
+void YamlOptionReader::Visit(const std::string& key, double* value) {
   if (const std::optional<YAML::Node> node = Find(key)) {
     try {
       *value = node->as<double>();
@@ -32,7 +33,7 @@ void OptionReader::Read(const std::string& key, double* value) {
   }
 }
 
-void OptionReader::Read(const std::string& key, int* value) {
+void YamlOptionReader::Visit(const std::string& key, int* value) {
   if (const std::optional<YAML::Node> node = Find(key)) {
     try {
       *value = node->as<int>();
@@ -42,7 +43,7 @@ void OptionReader::Read(const std::string& key, int* value) {
   }
 }
 
-void OptionReader::Read(const std::string& key, bool* value) {
+void YamlOptionReader::Visit(const std::string& key, bool* value) {
   if (const std::optional<YAML::Node> node = Find(key)) {
     try {
       *value = node->as<bool>();
@@ -52,14 +53,14 @@ void OptionReader::Read(const std::string& key, bool* value) {
   }
 }
 
-void OptionReader::Read(const std::string& key, std::string* value) {
+void YamlOptionReader::Visit(const std::string& key, std::string* value) {
   if (const std::optional<YAML::Node> node = Find(key)) {
     if (!node->IsScalar()) Fail(key, "a string");
     *value = node->as<std::string>();
   }
 }
 
-void OptionReader::RejectUnknownKeys() const {
+void YamlOptionReader::RejectUnknownKeys() const {
   if (!node_.IsMap()) return;
   std::string unknown;
   for (const auto& entry : node_) {
@@ -73,6 +74,26 @@ void OptionReader::RejectUnknownKeys() const {
         file_.source(), node_.Mark().line + 1,
         "unknown key(s) in '" + section_ + "': " + unknown + " (accepted: " + accepted + ")");
   }
+}
+
+OptionPrinter::OptionPrinter(std::ostream& out, const std::string& section) : out_(out) {
+  out_ << section << ":\n";
+}
+
+void OptionPrinter::Visit(const std::string& key, double* value) {
+  out_ << "  " << key << ": " << *value << "\n";
+}
+
+void OptionPrinter::Visit(const std::string& key, int* value) {
+  out_ << "  " << key << ": " << *value << "\n";
+}
+
+void OptionPrinter::Visit(const std::string& key, bool* value) {
+  out_ << "  " << key << ": " << (*value ? "true" : "false") << "\n";
+}
+
+void OptionPrinter::Visit(const std::string& key, std::string* value) {
+  out_ << "  " << key << ": " << *value << "\n";
 }
 
 }  // namespace stereo_fabmap_slam::io

@@ -7,6 +7,7 @@
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
 
 namespace stereo_fabmap_slam::camera {
 
@@ -24,6 +25,7 @@ struct RectificationOptions {
   // OpenCV's free scaling: 0 keeps only valid pixels (no black borders that would make edges
   // for the detector), 1 keeps every raw pixel.
   double alpha = 0.0;
+  void Visit(io::OptionVisitor& visitor) { visitor.Visit("alpha", &alpha); }
   void Validate() const;
 };
 

@@ -21,6 +21,10 @@ struct DescriptorKind {
   double max_match_distance = 0;  // beyond this two descriptors are never the same point
 };
 
+// Distance between row `i` of `a` and row `j` of `b` under `norm` (Hamming on raw bytes for
+// binary descriptors: far cheaper than cv::norm on Mat rows in the inner matching loops).
+double DescriptorDistance(const cv::Mat& a, int i, const cv::Mat& b, int j, int norm);
+
 // Throw std::invalid_argument with the list of available names for an unknown or unavailable one.
 cv::Ptr<cv::FeatureDetector> CreateDetector(const FeatureOptions& options);
 DescriptorKind CreateDescriptor(const FeatureOptions& options);

@@ -24,10 +24,8 @@ struct FeatureOptions {
   bool anms = true;             // spread key points with adaptive non-maximal suppression
   double anms_tolerance = 0.1;  // ANMS may return max_features within this fraction
 
-  void Load(io::OptionReader& reader);
+  void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument naming the bad value
 };
-
-std::ostream& operator<<(std::ostream& out, const FeatureOptions& options);
 
 }  // namespace stereo_fabmap_slam::features

@@ -47,6 +47,7 @@ class StereoFeatureExtractor {
   camera::StereoCamera camera_;
   AdaptiveDetector left_detector_, right_detector_;
   DescriptorKind descriptor_;
+  cv::Ptr<cv::DescriptorExtractor> second_extractor_;  // for the second thread: no shared state
   StereoMatcher matcher_;
 };
 

@@ -26,11 +26,9 @@ struct StereoMatcherOptions {
   int patch_radius = 5;             // [px] half side of the correlation patch
   int search_radius = 3;            // [px] columns searched either side of the matched key point
 
-  void Load(io::OptionReader& reader);
+  void Visit(io::OptionVisitor& visitor);
   void Validate() const;
 };
-
-std::ostream& operator<<(std::ostream& out, const StereoMatcherOptions& options);
 
 // Matches left key points to right key points of a rectified pair: candidates lie on the same
 // row band and within the disparity range; the best distance (patch or descriptor) must be below
@@ -39,8 +37,9 @@ std::ostream& operator<<(std::ostream& out, const StereoMatcherOptions& options)
 // parabola through the best three offsets.
 class StereoMatcher {
  public:
+  // parallel: match the two halves of the left key points on two threads.
   StereoMatcher(const StereoMatcherOptions& options, const camera::StereoCamera& camera, int norm,
-                double max_descriptor_distance);
+                double max_descriptor_distance, bool parallel = false);
 
   bool uses_descriptors() const { return options_.mode == "descriptor"; }
 
@@ -64,6 +63,7 @@ class StereoMatcher {
   camera::StereoCamera camera_;
   int norm_;
   double max_descriptor_distance_;
+  bool parallel_;
 };
 
 }  // namespace stereo_fabmap_slam::features

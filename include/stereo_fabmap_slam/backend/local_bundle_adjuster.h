@@ -1,0 +1,74 @@
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/odometry/keyframe_data.h"
+
+namespace stereo_fabmap_slam::backend {
+
+struct BundleAdjustmentOptions {
+  int window = 10;          // keyframes optimised together
+  int fixed_keyframes = 1;  // the oldest keyframes of the window are held fixed (the gauge)
+  int iterations = 10;      // Levenberg-Marquardt iterations a round
+  int rounds = 2;           // optimise, remove outlier observations, optimise again
+  double sigma = 1.0;       // [px] key point position noise
+  int threads = 1;
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
+// Windowed bundle adjustment with Ceres: the last `window` keyframes and the points they see,
+// stereo reprojection residuals (u_left, v, u_right) with a Huber loss; the oldest keyframes of
+// the window, and older keyframes that see the same points, stay fixed. Points seen by a single
+// keyframe are left out (they cannot inform a pose) and re-placed from their keyframe's new pose,
+// which is their exact optimum. Observations failing a 95 % chi-square test after a round are
+// removed; points left with none are removed.
+// Keeps every keyframe (pose and observations), so its memory grows with keyframes only.
+class LocalBundleAdjuster {
+ public:
+  LocalBundleAdjuster(const BundleAdjustmentOptions& options, const camera::StereoCamera& camera);
+
+  // Adds a keyframe and optimises the window; returns what changed.
+  odometry::KeyframeUpdate AddKeyframe(const odometry::KeyframeData& keyframe);
+
+  // Latest pose (T_world_camera) of every keyframe so far, by id.
+  std::map<std::int64_t, Eigen::Isometry3d> KeyframePoses() const;
+  std::size_t point_count() const { return points_.size(); }
+
+ private:
+  struct Observation {
+    std::int64_t keyframe;
+    float u, v, u_right;
+  };
+  struct Point {
+    Eigen::Vector3d position;
+    std::vector<Observation> observations;
+    // Where the point was measured first: that keyframe and the stereo point in its frame. A
+    // point seen once follows its keyframe exactly, which is the optimum for it.
+    std::int64_t anchor_keyframe;
+    Eigen::Vector3d anchor_point;
+  };
+  struct Keyframe {
+    Eigen::Isometry3d T_world_camera;
+    std::vector<std::int64_t> points;
+  };
+
+  odometry::KeyframeUpdate Optimise();
+
+  BundleAdjustmentOptions options_;
+  camera::StereoCamera camera_;
+  std::map<std::int64_t, Keyframe> keyframes_;
+  std::unordered_map<std::int64_t, Point> points_;
+  std::deque<std::int64_t> window_;
+};
+
+}  // namespace stereo_fabmap_slam::backend

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
+
+namespace stereo_fabmap_slam::odometry {
+
+// One map point seen in the current frame.
+struct PoseObservation {
+  Eigen::Vector3d world;
+  double u = 0, v = 0;
+  double u_right = -1;  // < 0: no stereo match in this frame
+};
+
+struct PoseRefinementOptions {
+  double sigma = 1.0;   // [px] key point position noise
+  int rounds = 2;       // optimise, re-classify outliers, optimise again...
+  int iterations = 10;  // Levenberg-Marquardt iterations a round
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
+struct PoseRefinement {
+  Eigen::Isometry3d T_camera_world = Eigen::Isometry3d::Identity();
+  std::vector<bool> inlier;  // per observation
+  int inliers = 0;
+};
+
+// Motion-only optimisation: the camera pose that minimises the robust (Huber) stereo
+// reprojection error of fixed map points. After each round every observation is classified
+// again by a chi-square test at 95 % (5.99 for 2 residuals, 7.81 for 3); outliers are left out
+// of the next round, and may come back if the pose moves.
+// `initial_inliers` (optional) says which observations the first round uses.
+PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
+                          const camera::StereoCamera& camera, const Eigen::Isometry3d& initial,
+                          const PoseRefinementOptions& options,
+                          const std::vector<bool>* initial_inliers = nullptr);
+
+}  // namespace stereo_fabmap_slam::odometry

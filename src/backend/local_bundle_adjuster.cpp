@@ -1,0 +1,179 @@
+#include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+
+#include "stereo_fabmap_slam/backend/pose_parameters.h"
+#include "stereo_fabmap_slam/backend/reprojection_error.h"
+
+namespace stereo_fabmap_slam::backend {
+namespace {
+
+constexpr double kChiSquareMono = 5.991;
+constexpr double kChiSquareStereo = 7.815;
+
+}  // namespace
+
+void BundleAdjustmentOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("window", &window);
+  visitor.Visit("fixed_keyframes", &fixed_keyframes);
+  visitor.Visit("iterations", &iterations);
+  visitor.Visit("rounds", &rounds);
+  visitor.Visit("sigma", &sigma);
+  visitor.Visit("threads", &threads);
+}
+
+void BundleAdjustmentOptions::Validate() const {
+  if (window < 2) throw std::invalid_argument("backend.window must be >= 2");
+  if (fixed_keyframes < 1 || fixed_keyframes >= window) {
+    throw std::invalid_argument("backend.fixed_keyframes must lie in [1, window)");
+  }
+  if (iterations < 1 || rounds < 1 || threads < 1) {
+    throw std::invalid_argument("backend iterations, rounds and threads must be >= 1");
+  }
+  if (!(sigma > 0)) throw std::invalid_argument("backend.sigma must be > 0");
+}
+
+LocalBundleAdjuster::LocalBundleAdjuster(const BundleAdjustmentOptions& options,
+                                         const camera::StereoCamera& camera)
+    : options_((options.Validate(), options)), camera_(camera) {}
+
+odometry::KeyframeUpdate LocalBundleAdjuster::AddKeyframe(const odometry::KeyframeData& data) {
+  if (data.starts_new_map) window_.clear();  // the old map is unrelated: no shared gauge
+  Keyframe& keyframe = keyframes_[data.id];
+  keyframe.T_world_camera = data.T_world_camera;
+  for (std::size_t i = 0; i < data.map_point_ids.size(); ++i) {
+    const std::int64_t id = data.map_point_ids[i];
+    if (id < 0) continue;
+    auto [it, inserted] = points_.try_emplace(id);
+    if (inserted) {
+      it->second.position = data.T_world_camera * data.features.points[i];
+      it->second.anchor_keyframe = data.id;
+      it->second.anchor_point = data.features.points[i];
+    }
+    const cv::Point2f& p = data.features.keypoints[i].pt;
+    it->second.observations.push_back({data.id, p.x, p.y, data.features.u_right[i]});
+    keyframe.points.push_back(id);
+  }
+  window_.push_back(data.id);
+  while (static_cast<int>(window_.size()) > options_.window) window_.pop_front();
+  return Optimise();
+}
+
+odometry::KeyframeUpdate LocalBundleAdjuster::Optimise() {
+  odometry::KeyframeUpdate update;
+  // Free keyframes: the window without its oldest. Points: those the window sees.
+  const std::set<std::int64_t> window(window_.begin(), window_.end());
+  std::set<std::int64_t> free_keyframes(
+      std::next(window_.begin(),
+                std::min<std::ptrdiff_t>(options_.fixed_keyframes, window_.size())),
+      window_.end());
+  // A point seen by one keyframe only can absorb its own residual exactly: it says nothing about
+  // poses, so it stays out of the problem (about half the points, seen once so far).
+  std::set<std::int64_t> point_ids;
+  for (const std::int64_t id : window_) {
+    for (const std::int64_t p : keyframes_[id].points) {
+      const auto it = points_.find(p);
+      if (it != points_.end() && it->second.observations.size() >= 2) point_ids.insert(p);
+    }
+  }
+  if (free_keyframes.empty() && point_ids.empty()) return update;
+
+  std::map<std::int64_t, PoseParameters> poses;
+  for (const std::int64_t p : point_ids) {
+    for (const Observation& o : points_[p].observations) {
+      if (!poses.count(o.keyframe)) {
+        poses[o.keyframe] =
+            PoseParameters::FromTransform(keyframes_[o.keyframe].T_world_camera.inverse());
+      }
+    }
+  }
+
+  ceres::HuberLoss loss(std::sqrt(kChiSquareStereo));
+  std::set<std::pair<std::int64_t, std::int64_t>> rejected;  // (point, keyframe)
+  for (int round = 0; round < options_.rounds; ++round) {
+    ceres::Problem::Options problem_options;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    for (const std::int64_t p : point_ids) {
+      Point& point = points_[p];
+      for (const Observation& o : point.observations) {
+        if (rejected.count({p, o.keyframe})) continue;
+        PoseParameters& pose = poses[o.keyframe];
+        problem.AddResidualBlock(
+            ReprojectionError::Create(camera_, o.u, o.v, o.u_right, options_.sigma), &loss,
+            pose.rotation, pose.translation, point.position.data());
+      }
+    }
+    for (auto& [id, pose] : poses) {
+      if (!problem.HasParameterBlock(pose.rotation)) continue;
+      problem.SetManifold(pose.rotation, new ceres::EigenQuaternionManifold);
+      if (!free_keyframes.count(id)) {
+        problem.SetParameterBlockConstant(pose.rotation);
+        problem.SetParameterBlockConstant(pose.translation);
+      }
+    }
+    ceres::Solver::Options solver_options;
+    // A window of ~10 cameras makes a small, dense reduced camera system.
+    solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+    solver_options.max_num_iterations = options_.iterations;
+    solver_options.num_threads = options_.threads;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+
+    for (const std::int64_t p : point_ids) {
+      const Point& point = points_[p];
+      for (const Observation& o : point.observations) {
+        const double chi2 =
+            SquaredReprojectionError(camera_, poses[o.keyframe].ToTransform(), point.position, o.u,
+                                     o.v, o.u_right, options_.sigma);
+        if (!(chi2 < (o.u_right >= 0 ? kChiSquareStereo : kChiSquareMono))) {
+          rejected.insert({p, o.keyframe});
+        }
+      }
+    }
+  }
+
+  for (const std::int64_t id : free_keyframes) {
+    keyframes_[id].T_world_camera = poses[id].ToTransform().inverse();
+    update.keyframe_poses.emplace_back(id, keyframes_[id].T_world_camera);
+    for (const std::int64_t p : keyframes_[id].points) {
+      const auto it = points_.find(p);
+      if (it == points_.end() || it->second.observations.size() != 1 ||
+          it->second.anchor_keyframe != id) {
+        continue;
+      }
+      it->second.position = keyframes_[id].T_world_camera * it->second.anchor_point;
+      update.point_positions.emplace_back(p, it->second.position);
+    }
+  }
+  // Drop rejected observations; a point without observations goes.
+  for (const std::int64_t p : point_ids) {
+    Point& point = points_[p];
+    point.observations.erase(std::remove_if(point.observations.begin(), point.observations.end(),
+                                            [&](const Observation& o) {
+                                              return rejected.count({p, o.keyframe}) > 0;
+                                            }),
+                             point.observations.end());
+    if (point.observations.empty()) {
+      points_.erase(p);
+      update.removed_points.push_back(p);
+    } else {
+      update.point_positions.emplace_back(p, point.position);
+    }
+  }
+  return update;
+}
+
+std::map<std::int64_t, Eigen::Isometry3d> LocalBundleAdjuster::KeyframePoses() const {
+  std::map<std::int64_t, Eigen::Isometry3d> poses;
+  for (const auto& [id, keyframe] : keyframes_) poses[id] = keyframe.T_world_camera;
+  return poses;
+}
+
+}  // namespace stereo_fabmap_slam::backend

@@ -1,0 +1,175 @@
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+namespace stereo_fabmap_slam::geometry {
+namespace {
+
+struct KernelName {
+  const char* name;
+  PnpKernel kernel;
+};
+constexpr KernelName kKernels[] = {
+    {"ITERATIVE", PnpKernel::kIterative}, {"EPNP", PnpKernel::kEpnp},
+    {"AP3P", PnpKernel::kAp3p},           {"P3P", PnpKernel::kP3p},
+    {"SQPNP", PnpKernel::kSqpnp},         {"UMEYAMA", PnpKernel::kUmeyama}};
+
+int OpenCvFlag(PnpKernel kernel) {
+  switch (kernel) {
+    case PnpKernel::kIterative:
+      return cv::SOLVEPNP_ITERATIVE;
+    case PnpKernel::kEpnp:
+      return cv::SOLVEPNP_EPNP;
+    case PnpKernel::kAp3p:
+      return cv::SOLVEPNP_AP3P;
+    case PnpKernel::kP3p:
+      return cv::SOLVEPNP_P3P;
+    case PnpKernel::kSqpnp:
+      return cv::SOLVEPNP_SQPNP;
+    case PnpKernel::kUmeyama:
+      break;
+  }
+  return cv::SOLVEPNP_ITERATIVE;
+}
+
+double ReprojectionError(const PnpCorrespondence& c, const Eigen::Isometry3d& T_camera_world,
+                         const camera::StereoCamera& camera) {
+  const Eigen::Vector3d p = T_camera_world * c.world;
+  if (p.z() <= 1e-6) return std::numeric_limits<double>::infinity();
+  return (Eigen::Vector2d(camera.fx * p.x() / p.z() + camera.cx,
+                          camera.fy * p.y() / p.z() + camera.cy) -
+          c.pixel)
+      .norm();
+}
+
+std::vector<int> Inliers(const std::vector<PnpCorrespondence>& correspondences,
+                         const Eigen::Isometry3d& T_camera_world,
+                         const camera::StereoCamera& camera, double threshold) {
+  std::vector<int> inliers;
+  for (int i = 0; i < static_cast<int>(correspondences.size()); ++i) {
+    if (ReprojectionError(correspondences[i], T_camera_world, camera) <= threshold)
+      inliers.push_back(i);
+  }
+  return inliers;
+}
+
+// T_camera_world from camera points and world points (rigid Umeyama fit).
+Eigen::Isometry3d FitRigid(const std::vector<PnpCorrespondence>& correspondences,
+                           const std::vector<int>& indices) {
+  Eigen::Matrix3Xd world(3, indices.size()), cam(3, indices.size());
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    world.col(static_cast<Eigen::Index>(k)) = correspondences[indices[k]].world;
+    cam.col(static_cast<Eigen::Index>(k)) = correspondences[indices[k]].camera_point;
+  }
+  return Eigen::Isometry3d(Eigen::umeyama(world, cam, false));
+}
+
+PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
+                        const camera::StereoCamera& camera, const PnpRansacOptions& options) {
+  std::vector<int> with_depth;
+  for (int i = 0; i < static_cast<int>(correspondences.size()); ++i) {
+    if (correspondences[i].has_depth) with_depth.push_back(i);
+  }
+  PnpResult best;
+  if (with_depth.size() < 3) return best;
+  std::mt19937_64 random(options.seed);
+  std::uniform_int_distribution<std::size_t> pick(0, with_depth.size() - 1);
+  int iterations = options.max_iterations;
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    std::vector<int> sample;
+    while (sample.size() < 3) {
+      const int candidate = with_depth[pick(random)];
+      if (std::find(sample.begin(), sample.end(), candidate) == sample.end())
+        sample.push_back(candidate);
+    }
+    const Eigen::Isometry3d hypothesis = FitRigid(correspondences, sample);
+    std::vector<int> inliers =
+        Inliers(correspondences, hypothesis, camera, options.reprojection_threshold);
+    if (inliers.size() > best.inliers.size()) {
+      best.success = true;
+      best.T_camera_world = hypothesis;
+      best.inliers = std::move(inliers);
+      // Standard adaptive iteration count for a 3-point sample.
+      const double ratio = static_cast<double>(best.inliers.size()) / correspondences.size();
+      const double needed = std::log(1.0 - options.confidence) / std::log(1.0 - std::pow(ratio, 3));
+      iterations = std::min(options.max_iterations, static_cast<int>(std::ceil(needed)));
+    }
+  }
+  if (best.success) {
+    // Refit on the inliers that have depth.
+    std::vector<int> refit;
+    for (const int i : best.inliers) {
+      if (correspondences[i].has_depth) refit.push_back(i);
+    }
+    if (refit.size() >= 3) {
+      best.T_camera_world = FitRigid(correspondences, refit);
+      best.inliers =
+          Inliers(correspondences, best.T_camera_world, camera, options.reprojection_threshold);
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::optional<PnpKernel> ParsePnpKernel(const std::string& name) {
+  for (const KernelName& k : kKernels) {
+    if (name == k.name) return k.kernel;
+  }
+  return std::nullopt;
+}
+
+std::string PnpKernelNames() {
+  std::string names;
+  for (const KernelName& k : kKernels) names += (names.empty() ? "" : ", ") + std::string(k.name);
+  return names;
+}
+
+PnpResult SolvePnpRansac(const std::vector<PnpCorrespondence>& correspondences,
+                         const camera::StereoCamera& camera, const PnpRansacOptions& options,
+                         const Eigen::Isometry3d& guess) {
+  if (options.kernel == PnpKernel::kUmeyama) return UmeyamaRansac(correspondences, camera, options);
+  PnpResult result;
+  if (correspondences.size() < 6) return result;
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (const PnpCorrespondence& c : correspondences) {
+    object.emplace_back(c.world.x(), c.world.y(), c.world.z());
+    image.emplace_back(c.pixel.x(), c.pixel.y());
+  }
+  cv::Mat rotation_vector, translation;
+  const Eigen::AngleAxisd guess_rotation(guess.linear());
+  const Eigen::Vector3d guess_vector = guess_rotation.angle() * guess_rotation.axis();
+  rotation_vector =
+      (cv::Mat_<double>(3, 1) << guess_vector.x(), guess_vector.y(), guess_vector.z());
+  translation = (cv::Mat_<double>(3, 1) << guess.translation().x(), guess.translation().y(),
+                 guess.translation().z());
+  std::vector<int> inliers;
+  const bool use_guess = options.kernel == PnpKernel::kIterative;
+  if (!cv::solvePnPRansac(object, image, camera.CameraMatrix(), cv::noArray(), rotation_vector,
+                          translation, use_guess, options.max_iterations,
+                          static_cast<float>(options.reprojection_threshold), options.confidence,
+                          inliers, OpenCvFlag(options.kernel))) {
+    return result;
+  }
+  cv::Mat rotation;
+  cv::Rodrigues(rotation_vector, rotation);
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  cv::cv2eigen(rotation, r);
+  cv::cv2eigen(translation, t);
+  result.T_camera_world.linear() = r;
+  result.T_camera_world.translation() = t;
+  // Inliers recounted with our own test, so that every kernel is judged the same way.
+  result.inliers =
+      Inliers(correspondences, result.T_camera_world, camera, options.reprojection_threshold);
+  result.success = result.inliers.size() >= 6;
+  return result;
+}
+
+}  // namespace stereo_fabmap_slam::geometry

@@ -1,0 +1,79 @@
+#include "stereo_fabmap_slam/odometry/pose_refiner.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+
+#include "stereo_fabmap_slam/backend/pose_parameters.h"
+#include "stereo_fabmap_slam/backend/reprojection_error.h"
+
+namespace stereo_fabmap_slam::odometry {
+namespace {
+
+constexpr double kChiSquareMono = 5.991;    // 95 %, 2 degrees of freedom
+constexpr double kChiSquareStereo = 7.815;  // 95 %, 3 degrees of freedom
+
+}  // namespace
+
+void PoseRefinementOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("sigma", &sigma);
+  visitor.Visit("rounds", &rounds);
+  visitor.Visit("iterations", &iterations);
+}
+
+void PoseRefinementOptions::Validate() const {
+  if (!(sigma > 0)) throw std::invalid_argument("pose refinement sigma must be > 0");
+  if (rounds < 1 || iterations < 1) {
+    throw std::invalid_argument("pose refinement rounds and iterations must be >= 1");
+  }
+}
+
+PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
+                          const camera::StereoCamera& camera, const Eigen::Isometry3d& initial,
+                          const PoseRefinementOptions& options,
+                          const std::vector<bool>* initial_inliers) {
+  PoseRefinement result;
+  result.T_camera_world = initial;
+  result.inlier =
+      initial_inliers != nullptr ? *initial_inliers : std::vector<bool>(observations.size(), true);
+  ceres::HuberLoss loss(std::sqrt(kChiSquareStereo));
+  for (int round = 0; round < options.rounds; ++round) {
+    backend::PoseParameters pose = backend::PoseParameters::FromTransform(result.T_camera_world);
+    ceres::Problem::Options problem_options;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    int residual_blocks = 0;
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      if (!result.inlier[i]) continue;
+      const PoseObservation& o = observations[i];
+      problem.AddResidualBlock(backend::FixedPointReprojectionError::Create(
+                                   camera, o.world, o.u, o.v, o.u_right, options.sigma),
+                               &loss, pose.rotation, pose.translation);
+      ++residual_blocks;
+    }
+    if (residual_blocks < 3) break;
+    problem.SetManifold(pose.rotation, new ceres::EigenQuaternionManifold);
+    ceres::Solver::Options solver_options;
+    // Six unknowns: the normal equations are a 6x6 system, far cheaper than a QR of J.
+    solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+    solver_options.max_num_iterations = options.iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    result.T_camera_world = pose.ToTransform();
+
+    result.inliers = 0;
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      const PoseObservation& o = observations[i];
+      const double chi2 = backend::SquaredReprojectionError(camera, result.T_camera_world, o.world,
+                                                            o.u, o.v, o.u_right, options.sigma);
+      result.inlier[i] = chi2 < (o.u_right >= 0 ? kChiSquareStereo : kChiSquareMono);
+      result.inliers += result.inlier[i] ? 1 : 0;
+    }
+  }
+  return result;
+}
+
+}  // namespace stereo_fabmap_slam::odometry

@@ -1,0 +1,341 @@
+#include "stereo_fabmap_slam/odometry/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "stereo_fabmap_slam/features/feature_factory.h"
+
+namespace stereo_fabmap_slam::odometry {
+namespace {
+
+constexpr double kRadiansToDegrees = 180.0 / M_PI;
+
+// Key points of a frame binned in square cells, for radius searches.
+class KeypointGrid {
+ public:
+  KeypointGrid(const std::vector<cv::KeyPoint>& keypoints, const cv::Size& size, int cell)
+      : cell_(cell),
+        columns_(size.width / cell + 1),
+        rows_(size.height / cell + 1),
+        cells_(static_cast<std::size_t>(columns_ * rows_)),
+        keypoints_(keypoints) {
+    for (int i = 0; i < static_cast<int>(keypoints.size()); ++i) {
+      cells_[Index(keypoints[i].pt.x, keypoints[i].pt.y)].push_back(i);
+    }
+  }
+
+  template <typename Visit>
+  void ForEachWithin(double u, double v, double radius, Visit visit) const {
+    const int c0 = std::max(0, static_cast<int>((u - radius) / cell_));
+    const int c1 = std::min(columns_ - 1, static_cast<int>((u + radius) / cell_));
+    const int r0 = std::max(0, static_cast<int>((v - radius) / cell_));
+    const int r1 = std::min(rows_ - 1, static_cast<int>((v + radius) / cell_));
+    const double radius2 = radius * radius;
+    for (int r = r0; r <= r1; ++r) {
+      for (int c = c0; c <= c1; ++c) {
+        for (const int i : cells_[static_cast<std::size_t>(r * columns_ + c)]) {
+          const double du = keypoints_[i].pt.x - u, dv = keypoints_[i].pt.y - v;
+          if (du * du + dv * dv <= radius2) visit(i);
+        }
+      }
+    }
+  }
+
+ private:
+  std::size_t Index(double u, double v) const {
+    const int c = std::clamp(static_cast<int>(u / cell_), 0, columns_ - 1);
+    const int r = std::clamp(static_cast<int>(v / cell_), 0, rows_ - 1);
+    return static_cast<std::size_t>(r * columns_ + c);
+  }
+
+  int cell_, columns_, rows_;
+  std::vector<std::vector<int>> cells_;
+  const std::vector<cv::KeyPoint>& keypoints_;
+};
+
+double RotationDegrees(const Eigen::Isometry3d& motion) {
+  return Eigen::AngleAxisd(motion.linear()).angle() * kRadiansToDegrees;
+}
+
+}  // namespace
+
+void TrackerOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("search_radius", &search_radius);
+  visitor.Visit("search_radius_fine", &search_radius_fine);
+  visitor.Visit("match_ratio", &match_ratio);
+  visitor.Visit("pnp_kernel", &pnp_kernel);
+  visitor.Visit("ransac_threshold", &ransac_threshold);
+  visitor.Visit("ransac_iterations", &ransac_iterations);
+  visitor.Visit("min_inliers_ok", &min_inliers_ok);
+  visitor.Visit("min_inliers_weak", &min_inliers_weak);
+  visitor.Visit("min_map_points", &min_map_points);
+  visitor.Visit("local_keyframes", &local_keyframes);
+  visitor.Visit("refinement_sigma", &refinement.sigma);
+  visitor.Visit("refinement_rounds", &refinement.rounds);
+  visitor.Visit("refinement_iterations", &refinement.iterations);
+}
+
+void TrackerOptions::Validate() const {
+  if (!(search_radius > 0 && search_radius_fine > 0)) {
+    throw std::invalid_argument("tracker search radii must be > 0");
+  }
+  if (!(match_ratio > 0 && match_ratio <= 1)) {
+    throw std::invalid_argument("tracker.match_ratio must lie in (0, 1]");
+  }
+  if (!geometry::ParsePnpKernel(pnp_kernel)) {
+    throw std::invalid_argument("tracker.pnp_kernel '" + pnp_kernel +
+                                "' is unknown; available: " + geometry::PnpKernelNames());
+  }
+  if (!(ransac_threshold > 0) || ransac_iterations < 1) {
+    throw std::invalid_argument("tracker RANSAC threshold and iterations must be > 0");
+  }
+  if (min_inliers_weak < 6 || min_inliers_ok < min_inliers_weak) {
+    throw std::invalid_argument("tracker: need 6 <= min_inliers_weak <= min_inliers_ok");
+  }
+  if (min_map_points < 3 || local_keyframes < 1) {
+    throw std::invalid_argument("tracker: min_map_points >= 3 and local_keyframes >= 1");
+  }
+  refinement.Validate();
+}
+
+const char* TrackingStateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kWeak:
+      return "weak";
+    case TrackingState::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+Tracker::Tracker(const TrackerOptions& options, const KeyframePolicyOptions& keyframe_options,
+                 const camera::StereoCamera& camera, int descriptor_norm,
+                 double max_descriptor_distance)
+    : options_((options.Validate(), options)),
+      keyframe_policy_(keyframe_options),
+      camera_(camera),
+      descriptor_norm_(descriptor_norm),
+      max_descriptor_distance_(max_descriptor_distance),
+      local_map_(options.local_keyframes) {
+  ransac_options_.kernel = *geometry::ParsePnpKernel(options.pnp_kernel);
+  ransac_options_.reprojection_threshold = options.ransac_threshold;
+  ransac_options_.max_iterations = options.ransac_iterations;
+}
+
+void Tracker::Reset() {
+  local_map_.Clear();
+  has_last_ = false;
+  velocity_ = Eigen::Isometry3d::Identity();
+}
+
+std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFeatures& features,
+                                                        const Eigen::Isometry3d& T_camera_world,
+                                                        double radius) const {
+  const KeypointGrid grid(features.keypoints, camera_.size, 16);
+  std::unordered_map<int, Match> best_by_keypoint;
+  // Points come in id order, so ties resolve the same way every run.
+  for (const auto& [id, map_point] : local_map_.points()) {
+    const MapPoint* point = &map_point;
+    const Eigen::Vector3d c = T_camera_world * point->position;
+    if (c.z() < 0.05) continue;
+    const double u = camera_.fx * c.x() / c.z() + camera_.cx;
+    const double v = camera_.fy * c.y() / c.z() + camera_.cy;
+    if (u < 0 || v < 0 || u >= camera_.size.width || v >= camera_.size.height) continue;
+    double best = std::numeric_limits<double>::max(), second = best;
+    int best_index = -1;
+    grid.ForEachWithin(u, v, radius, [&](int i) {
+      const double distance = features::DescriptorDistance(
+          point->descriptor, 0, features.descriptors, i, descriptor_norm_);
+      if (distance < best) {
+        second = best;
+        best = distance;
+        best_index = i;
+      } else if (distance < second) {
+        second = distance;
+      }
+    });
+    if (best_index < 0 || best > max_descriptor_distance_ || best > options_.match_ratio * second) {
+      continue;
+    }
+    auto [it, inserted] = best_by_keypoint.try_emplace(best_index, Match{point, best_index, best});
+    if (!inserted && best < it->second.distance) it->second = Match{point, best_index, best};
+  }
+  std::vector<Match> matches;
+  matches.reserve(best_by_keypoint.size());
+  for (const auto& entry : best_by_keypoint) matches.push_back(entry.second);
+  std::sort(matches.begin(), matches.end(),
+            [](const Match& a, const Match& b) { return a.keypoint < b.keypoint; });
+  return matches;
+}
+
+std::vector<PoseObservation> Tracker::Observations(const features::StereoFeatures& features,
+                                                   const std::vector<Match>& matches) const {
+  std::vector<PoseObservation> observations;
+  observations.reserve(matches.size());
+  for (const Match& m : matches) {
+    const cv::Point2f& p = features.keypoints[m.keypoint].pt;
+    observations.push_back({m.point->position, p.x, p.y, features.u_right[m.keypoint]});
+  }
+  return observations;
+}
+
+KeyframeData Tracker::MakeKeyframe(double timestamp, features::StereoFeatures features,
+                                   const Eigen::Isometry3d& T_world_camera,
+                                   const std::vector<Match>& inlier_matches, bool starts_new_map) {
+  KeyframeData keyframe;
+  keyframe.id = next_keyframe_id_++;
+  keyframe.timestamp = timestamp;
+  keyframe.T_world_camera = T_world_camera;
+  keyframe.starts_new_map = starts_new_map;
+  keyframe.map_point_ids.assign(features.size(), -1);
+  for (const Match& m : inlier_matches) keyframe.map_point_ids[m.keypoint] = m.point->id;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (keyframe.map_point_ids[i] < 0 && features.HasDepth(i)) {
+      keyframe.map_point_ids[i] = next_point_id_++;
+    }
+  }
+  keyframe.features = std::move(features);
+  local_map_.AddKeyframe(keyframe);
+  last_keyframe_pose_ = T_world_camera;
+  last_keyframe_time_ = timestamp;
+  most_tracked_since_keyframe_ = static_cast<int>(inlier_matches.size());
+  return keyframe;
+}
+
+void Tracker::StartMap(double timestamp, features::StereoFeatures features,
+                       const Eigen::Isometry3d& T_world_camera, TrackingResult* result) {
+  result->T_world_camera = T_world_camera;
+  if (features.CountWithDepth() < options_.min_map_points) {
+    result->reason += (result->reason.empty() ? "" : "; ") +
+                      std::string("too few stereo points (") +
+                      std::to_string(features.CountWithDepth()) + ") to start a map";
+    return;
+  }
+  const bool starts_new_map = had_map_;
+  local_map_.Clear();
+  result->keyframe =
+      MakeKeyframe(timestamp, std::move(features), T_world_camera, {}, starts_new_map);
+  had_map_ = true;
+  result->reason += (result->reason.empty() ? "" : "; ") + std::string("map started");
+}
+
+void Tracker::Remember(double timestamp, const Eigen::Isometry3d& T_world_camera,
+                       TrackingResult* result) {
+  if (has_last_) velocity_ = last_T_world_camera_.inverse() * T_world_camera;
+  has_last_ = true;
+  last_timestamp_ = timestamp;
+  last_T_world_camera_ = T_world_camera;
+  result->T_world_camera = T_world_camera;
+  if (!local_map_.empty()) {
+    result->reference_keyframe = local_map_.last_keyframe_id();
+    result->T_keyframe_camera = last_keyframe_pose_.inverse() * T_world_camera;
+  }
+}
+
+TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features) {
+  TrackingResult result;
+  const Eigen::Isometry3d predicted =
+      has_last_ ? last_T_world_camera_ * velocity_ : Eigen::Isometry3d::Identity();
+
+  if (local_map_.empty()) {
+    result.state = TrackingState::kOk;
+    StartMap(timestamp, std::move(features), predicted, &result);
+    if (!result.keyframe) result.state = TrackingState::kLost;
+    Remember(timestamp, predicted, &result);
+    return result;
+  }
+
+  // Coarse search around the predicted pose (wider if that finds too little), RANSAC, refine.
+  std::vector<Match> matches =
+      SearchByProjection(features, predicted.inverse(), options_.search_radius);
+  if (static_cast<int>(matches.size()) < options_.min_inliers_ok) {
+    matches = SearchByProjection(features, predicted.inverse(), 3.0 * options_.search_radius);
+  }
+  std::vector<PoseObservation> observations = Observations(features, matches);
+  std::vector<geometry::PnpCorrespondence> correspondences;
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    const int i = matches[k].keypoint;
+    correspondences.push_back({observations[k].world,
+                               {observations[k].u, observations[k].v},
+                               features.HasDepth(static_cast<std::size_t>(i)),
+                               features.points[static_cast<std::size_t>(i)]});
+  }
+  const geometry::PnpResult ransac =
+      geometry::SolvePnpRansac(correspondences, camera_, ransac_options_, predicted.inverse());
+  result.matches = static_cast<int>(matches.size());
+  if (!ransac.success || static_cast<int>(ransac.inliers.size()) < options_.min_inliers_weak) {
+    result.state = TrackingState::kLost;
+    result.reason = "only " + std::to_string(ransac.inliers.size()) + " RANSAC inliers of " +
+                    std::to_string(matches.size()) + " matches";
+    StartMap(timestamp, std::move(features), predicted, &result);
+    Remember(timestamp, predicted, &result);
+    return result;
+  }
+  // The RANSAC pose is already re-fitted to its whole consensus set (by OpenCV, or by the
+  // Umeyama kernel): good enough to search again with a fine radius, which finds the points
+  // the coarse search missed, before the robust refinement.
+  matches = SearchByProjection(features, ransac.T_camera_world, options_.search_radius_fine);
+  observations = Observations(features, matches);
+  const PoseRefinement refined =
+      RefinePose(observations, camera_, ransac.T_camera_world, options_.refinement);
+  std::vector<Match> inlier_matches;
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    if (refined.inlier[k]) inlier_matches.push_back(matches[k]);
+  }
+  result.matches = static_cast<int>(matches.size());
+  result.inliers = refined.inliers;
+  const Eigen::Isometry3d T_world_camera = refined.T_camera_world.inverse();
+
+  if (result.inliers < options_.min_inliers_weak) {
+    result.state = TrackingState::kLost;
+    result.reason = "only " + std::to_string(result.inliers) + " inliers after refinement";
+    StartMap(timestamp, std::move(features), predicted, &result);
+    Remember(timestamp, predicted, &result);
+    return result;
+  }
+  result.state =
+      result.inliers < options_.min_inliers_ok ? TrackingState::kWeak : TrackingState::kOk;
+  if (result.state == TrackingState::kWeak) {
+    result.reason = std::to_string(result.inliers) + " inliers";
+  }
+
+  KeyframePolicyInput policy_input;
+  policy_input.tracked_points = result.inliers;
+  // The overlap with the map peaks a frame or two after a keyframe (its new points become
+  // trackable) and then falls as the camera moves on: compare with that peak.
+  most_tracked_since_keyframe_ = std::max(most_tracked_since_keyframe_, result.inliers);
+  policy_input.reference_tracked_points = most_tracked_since_keyframe_;
+  const Eigen::Isometry3d since_keyframe = last_keyframe_pose_.inverse() * T_world_camera;
+  policy_input.translation_since_last = since_keyframe.translation().norm();
+  policy_input.rotation_since_last_deg = RotationDegrees(since_keyframe);
+  policy_input.time_since_last = timestamp - last_keyframe_time_;
+  policy_input.tracking_weak = result.state == TrackingState::kWeak;
+  const KeyframeDecision decision = keyframe_policy_.Decide(policy_input);
+  if (decision.insert) {
+    result.keyframe =
+        MakeKeyframe(timestamp, std::move(features), T_world_camera, inlier_matches, false);
+    result.reason += (result.reason.empty() ? "" : "; ") + ("keyframe: " + decision.reason);
+  }
+  Remember(timestamp, T_world_camera, &result);
+  return result;
+}
+
+void Tracker::ApplyUpdate(const KeyframeUpdate& update) {
+  if (local_map_.empty()) return;
+  const std::int64_t last_id = local_map_.last_keyframe_id();
+  local_map_.ApplyUpdate(update);
+  // Keep the last frame where it is relative to the last keyframe, so that the motion model and
+  // the next prediction live in the corrected map.
+  if (const Eigen::Isometry3d* corrected = local_map_.KeyframePose(last_id)) {
+    const Eigen::Isometry3d relative = last_keyframe_pose_.inverse() * last_T_world_camera_;
+    last_keyframe_pose_ = *corrected;
+    last_T_world_camera_ = *corrected * relative;
+  }
+}
+
+}  // namespace stereo_fabmap_slam::odometry

@@ -1,0 +1,213 @@
+// Runs the odometry offline on an EuRoC ASL sequence, in one thread and deterministically, and
+// writes trajectory.txt, keyframes.txt, timing.csv and summary.json.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <iostream>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "command_line.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
+#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/pipeline/stereo_odometry.h"
+
+namespace {
+
+using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
+
+constexpr char kUsage[] =
+    "usage: run_dataset ASL_DIR [--config FILE] [--output DIR] [--quiet]\n"
+    "Runs the stereo odometry on an EuRoC sequence and writes to DIR (default output/<name>):\n"
+    "  trajectory.txt  TUM, rectified left camera in the world frame, every frame\n"
+    "  keyframes.txt   TUM, keyframes after the last optimisation\n"
+    "  timing.csv      milliseconds per frame and stage\n"
+    "  summary.json    counts, times, and ATE against ground truth when the sequence has it\n"
+    "Default config: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml\n";
+
+double NowMs() {
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+struct Stats {
+  double median = 0, mean = 0;
+};
+
+Stats Summarise(std::vector<double> values) {
+  Stats stats;
+  if (values.empty()) return stats;
+  stats.mean = std::accumulate(values.begin(), values.end(), 0.0) / values.size();
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  stats.median = values[values.size() / 2];
+  return stats;
+}
+
+double CpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+         1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+double PeakResidentMegabytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
+}
+
+void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (file == nullptr) throw std::runtime_error("cannot write " + path);
+  std::fprintf(file,
+               "frame,timestamp,state,keyframe,rectification_ms,detection_ms,description_ms,"
+               "stereo_ms,tracking_ms,bundle_adjustment_ms,inliers,note\n");
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const pipeline::FrameRecord& f = frames[i];
+    const pipeline::FrameTiming& t = f.timing;
+    std::fprintf(file, "%zu,%.9f,%s,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,\"%s\"\n", i, f.timestamp,
+                 odometry::TrackingStateName(f.state), f.is_keyframe ? 1 : 0, t.rectification_ms,
+                 t.detection_ms, t.description_ms, t.stereo_ms, t.tracking_ms,
+                 t.bundle_adjustment_ms, f.inliers, f.note.c_str());
+  }
+  std::fclose(file);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::optional<tools::CommandLine> args;
+  try {
+    args.emplace(argc, argv, std::set<std::string>{"config", "output"},
+                 std::set<std::string>{"quiet", "help"});
+    if (args->Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (args->positional().size() != 1) throw std::invalid_argument("expected one ASL_DIR");
+  } catch (const std::invalid_argument& error) {
+    std::fprintf(stderr, "run_dataset: %s\n%s", error.what(), kUsage);
+    return 2;
+  }
+  try {
+    const std::string asl = args->positional()[0];
+    const std::string config = args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml");
+    const std::string name = std::filesystem::path(asl).filename().empty()
+                                 ? std::filesystem::path(asl).parent_path().filename().string()
+                                 : std::filesystem::path(asl).filename().string();
+    const std::string output = args->ValueOr("output", "output/" + name);
+    const bool quiet = args->Flag("quiet");
+
+    const pipeline::PipelineOptions options = pipeline::LoadPipelineOptions(config);
+    const io::EurocSequence sequence = io::EurocSequence::Open(asl);
+    const camera::StereoRectifier rectifier =
+        camera::StereoRectifier::FromCalibration(sequence.calibration(), options.rectification);
+    if (!quiet) {
+      std::cout << "config " << config << "\n";
+      options.Print(std::cout);
+      std::cout << "sequence " << asl << ": " << sequence.size() << " stereo pairs\n";
+    }
+    for (const io::UnpairedImage& image : sequence.unpaired()) {
+      std::fprintf(stderr, "warning: %s image %s has no partner, skipped\n", image.camera.c_str(),
+                   image.path.c_str());
+    }
+    std::filesystem::create_directories(output);
+
+    pipeline::StereoOdometry odometry(options, rectifier, NowMs);
+    const double cpu_start = CpuSeconds();
+    double processing_ms = 0;  // excludes reading images from disk
+    const double wall_start = NowMs();
+    for (std::size_t i = 0; i < sequence.size(); ++i) {
+      const io::StereoImages images = sequence.LoadStereoPair(i);
+      const double start = NowMs();
+      const pipeline::FrameRecord& frame =
+          odometry.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+      processing_ms += NowMs() - start;
+      if (!quiet && (frame.state == odometry::TrackingState::kLost || (i + 1) % 100 == 0)) {
+        std::printf("frame %zu/%zu: %s, %zu keyframes\n", i + 1, sequence.size(),
+                    odometry::TrackingStateName(frame.state), odometry.keyframe_count());
+      }
+    }
+    const double wall_s = (NowMs() - wall_start) / 1000.0;
+    const double cpu_s = CpuSeconds() - cpu_start;
+
+    const evaluation::Trajectory trajectory = odometry.CameraTrajectory();
+    evaluation::WriteTumTrajectory(trajectory, output + "/trajectory.txt");
+    evaluation::WriteTumTrajectory(odometry.KeyframeTrajectory(), output + "/keyframes.txt");
+    WriteTiming(odometry.frames(), output + "/timing.csv");
+
+    std::vector<double> stage[7];
+    int tracked = 0;
+    for (const pipeline::FrameRecord& f : odometry.frames()) {
+      tracked += f.state != odometry::TrackingState::kLost ? 1 : 0;
+      const pipeline::FrameTiming& t = f.timing;
+      const double values[7] = {t.rectification_ms, t.detection_ms, t.description_ms,
+                                t.stereo_ms,        t.tracking_ms,  t.bundle_adjustment_ms,
+                                t.TrackingTotal()};
+      for (int k = 0; k < 7; ++k) stage[k].push_back(values[k]);
+    }
+    const char* names[7] = {"rectification", "detection",         "description",   "stereo",
+                            "tracking",      "bundle_adjustment", "tracking_total"};
+    const double duration =
+        sequence.size() > 1
+            ? (sequence.frames().back().timestamp_ns - sequence.frames().front().timestamp_ns) *
+                      1e-9 +
+                  0.05
+            : 0.05;
+    std::string json = "{\"sequence\": \"" + name +
+                       "\", \"frames\": " + std::to_string(sequence.size()) +
+                       ", \"frames_tracked\": " + std::to_string(tracked) +
+                       ", \"keyframes\": " + std::to_string(odometry.keyframe_count());
+    char buffer[256];
+    std::snprintf(buffer, sizeof(buffer),
+                  ", \"wall_time_s\": %.3f, \"processing_time_s\": %.3f, \"cpu_time_s\": %.3f, "
+                  "\"realtime_factor\": %.3f, \"peak_rss_mb\": %.1f",
+                  wall_s, processing_ms / 1000.0, cpu_s, duration / (processing_ms / 1000.0),
+                  PeakResidentMegabytes());
+    json += buffer;
+    for (int k = 0; k < 7; ++k) {
+      const Stats s = Summarise(stage[k]);
+      std::snprintf(buffer, sizeof(buffer), ", \"%s_ms_median\": %.3f, \"%s_ms_mean\": %.3f",
+                    names[k], s.median, names[k], s.mean);
+      json += buffer;
+    }
+    if (sequence.has_ground_truth()) {
+      // Ground truth is the body frame: move it to the rectified left camera we estimate.
+      const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
+          sequence.ground_truth(), rectifier.T_body_rectified_left());
+      const evaluation::EvaluationResult result =
+          evaluation::EvaluateTrajectory(truth, trajectory, evaluation::EvaluationOptions{});
+      const auto& est = result.aligned_estimate;
+      const auto& ref = result.matched_reference;
+      const Eigen::Vector3d est_move =
+          est.back().pose.translation() - est.front().pose.translation();
+      const Eigen::Vector3d ref_move =
+          ref.back().pose.translation() - ref.front().pose.translation();
+      std::snprintf(buffer, sizeof(buffer),
+                    ", \"ate_rmse\": %.6f, \"ate_max\": %.6f, \"ate_matched\": %zu, "
+                    "\"rpe_trans_rmse\": %.6f, \"displacement_estimate\": %.6f, "
+                    "\"displacement_ground_truth\": %.6f, \"displacement_error\": %.6f",
+                    result.ate.rmse, result.ate.max, result.matched, result.rpe.translation.rmse,
+                    est_move.norm(), ref_move.norm(), (est_move - ref_move).norm());
+      json += buffer;
+    }
+    json += "}\n";
+    std::FILE* file = std::fopen((output + "/summary.json").c_str(), "w");
+    if (file == nullptr) throw std::runtime_error("cannot write " + output + "/summary.json");
+    std::fputs(json.c_str(), file);
+    std::fclose(file);
+    std::fputs(json.c_str(), stdout);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "run_dataset: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}
