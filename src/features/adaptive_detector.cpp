@@ -60,7 +60,7 @@ void AdaptiveDetector::Adapt(std::size_t corner_count) {
   // Corner counts fall roughly exponentially with the threshold: steps of 10 % are gentle enough
   // not to oscillate and quick enough to follow a change of scene within a few frames.
   const double count = static_cast<double>(corner_count);
-  const double target_low = 2.0 * options_.max_features, target_high = 4.0 * options_.max_features;
+  const double target_low = 1.5 * options_.max_features, target_high = 3.0 * options_.max_features;
   int next = threshold_;
   if (count < target_low) next = static_cast<int>(std::floor(threshold_ * 0.9));
   if (count > target_high) next = static_cast<int>(std::ceil(threshold_ * 1.1));

@@ -79,6 +79,10 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
       const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, rows - 1);
       double best = std::numeric_limits<double>::max(), second = best;
       int best_j = -1;
+      const Patch left_patch =
+          uses_descriptors()
+              ? Patch{}
+              : MakePatch(left_image, cv::Point(static_cast<int>(std::lround(p.x)), row));
       for (const int j : by_row[static_cast<std::size_t>(row)]) {
         const cv::Point2f& q = right[j].pt;
         const double disparity = p.x - q.x;
@@ -89,8 +93,7 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
         const double distance =
             uses_descriptors()
                 ? DescriptorDistance(left_descriptors, i, right_descriptors, j, norm_)
-                : PatchDistance(left_image, cv::Point(static_cast<int>(std::lround(p.x)), row),
-                                right_image,
+                : PatchDistance(left_patch, right_image,
                                 cv::Point(static_cast<int>(std::lround(q.x)),
                                           static_cast<int>(std::lround(q.y))));
         if (distance < best) {
@@ -122,28 +125,48 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
   return u_right;
 }
 
-double StereoMatcher::PatchDistance(const cv::Mat& left_image, const cv::Point& left,
-                                    const cv::Mat& right_image, const cv::Point& right) const {
+StereoMatcher::Patch StereoMatcher::MakePatch(const cv::Mat& image, const cv::Point& centre) const {
+  Patch patch;
   const int r = options_.patch_radius;
-  const cv::Rect inside(r, r, left_image.cols - 2 * r, left_image.rows - 2 * r);
-  if (!inside.contains(left) || !inside.contains(right)) return 2.0;
-  double sum_l = 0, sum_r = 0, sum_ll = 0, sum_rr = 0, sum_lr = 0;
+  if (centre.x < r || centre.y < r || centre.x >= image.cols - r || centre.y >= image.rows - r) {
+    return patch;
+  }
+  patch.valid = true;
+  patch.image = &image;
+  patch.centre = centre;
   for (int dy = -r; dy <= r; ++dy) {
-    const std::uint8_t* l = left_image.ptr<std::uint8_t>(left.y + dy) + left.x - r;
+    const std::uint8_t* row = image.ptr<std::uint8_t>(centre.y + dy) + centre.x - r;
+    for (int dx = 0; dx <= 2 * r; ++dx) {
+      patch.sum += row[dx];
+      patch.sum_squares += row[dx] * row[dx];
+    }
+  }
+  return patch;
+}
+
+double StereoMatcher::PatchDistance(const Patch& left, const cv::Mat& right_image,
+                                    const cv::Point& right) const {
+  const int r = options_.patch_radius;
+  if (!left.valid || right.x < r || right.y < r || right.x >= right_image.cols - r ||
+      right.y >= right_image.rows - r) {
+    return 2.0;
+  }
+  // Integer sums: 11x11 patches of 8-bit values cannot overflow 32 bits.
+  std::int32_t sum_r = 0, sum_rr = 0, sum_lr = 0;
+  for (int dy = -r; dy <= r; ++dy) {
+    const std::uint8_t* l = left.image->ptr<std::uint8_t>(left.centre.y + dy) + left.centre.x - r;
     const std::uint8_t* q = right_image.ptr<std::uint8_t>(right.y + dy) + right.x - r;
     for (int dx = 0; dx <= 2 * r; ++dx) {
-      const double a = l[dx], b = q[dx];
-      sum_l += a;
-      sum_r += b;
-      sum_ll += a * a;
-      sum_rr += b * b;
-      sum_lr += a * b;
+      sum_r += q[dx];
+      sum_rr += q[dx] * q[dx];
+      sum_lr += l[dx] * q[dx];
     }
   }
   const double n = (2 * r + 1) * (2 * r + 1);
-  const double var_l = sum_ll - sum_l * sum_l / n, var_r = sum_rr - sum_r * sum_r / n;
+  const double var_l = left.sum_squares - double(left.sum) * left.sum / n;
+  const double var_r = sum_rr - double(sum_r) * sum_r / n;
   if (var_l < n || var_r < n) return 2.0;  // flat patch (std below 1 grey level): no information
-  return 1.0 - (sum_lr - sum_l * sum_r / n) / std::sqrt(var_l * var_r);
+  return 1.0 - (sum_lr - double(left.sum) * sum_r / n) / std::sqrt(var_l * var_r);
 }
 
 float StereoMatcher::RefineColumn(const cv::Mat& left_image, const cv::Point2f& left_point,
@@ -180,7 +203,8 @@ float StereoMatcher::RefineColumn(const cv::Mat& left_image, const cv::Point2f& 
   const double before = costs[best - 1], here = costs[best], after = costs[best + 1];
   const double delta = (before - after) / (2.0 * (before + after - 2.0 * here));
   if (std::abs(delta) > 1.0) return -1.0f;
-  return static_cast<float>(ur + (best - search - 1) + delta);
+  // The left patch was centred on the whole pixel ul; the key point may lie a fraction away.
+  return static_cast<float>(ur + (best - search - 1) + delta + (left_point.x - ul));
 }
 
 }  // namespace stereo_fabmap_slam::features

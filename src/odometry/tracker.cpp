@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <stdexcept>
 #include <unordered_map>
@@ -73,6 +74,7 @@ void TrackerOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_inliers_weak", &min_inliers_weak);
   visitor.Visit("min_map_points", &min_map_points);
   visitor.Visit("local_keyframes", &local_keyframes);
+  visitor.Visit("parallel", &parallel);
   visitor.Visit("refinement_sigma", &refinement.sigma);
   visitor.Visit("refinement_rounds", &refinement.rounds);
   visitor.Visit("refinement_iterations", &refinement.iterations);
@@ -137,33 +139,60 @@ std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFe
                                                         const Eigen::Isometry3d& T_camera_world,
                                                         double radius) const {
   const KeypointGrid grid(features.keypoints, camera_.size, 16);
-  std::unordered_map<int, Match> best_by_keypoint;
-  // Points come in id order, so ties resolve the same way every run.
-  for (const auto& [id, map_point] : local_map_.points()) {
-    const MapPoint* point = &map_point;
-    const Eigen::Vector3d c = T_camera_world * point->position;
-    if (c.z() < 0.05) continue;
-    const double u = camera_.fx * c.x() / c.z() + camera_.cx;
-    const double v = camera_.fy * c.y() / c.z() + camera_.cy;
-    if (u < 0 || v < 0 || u >= camera_.size.width || v >= camera_.size.height) continue;
-    double best = std::numeric_limits<double>::max(), second = best;
-    int best_index = -1;
-    grid.ForEachWithin(u, v, radius, [&](int i) {
-      const double distance = features::DescriptorDistance(
-          point->descriptor, 0, features.descriptors, i, descriptor_norm_);
-      if (distance < best) {
-        second = best;
-        best = distance;
-        best_index = i;
-      } else if (distance < second) {
-        second = distance;
-      }
-    });
-    if (best_index < 0 || best > max_descriptor_distance_ || best > options_.match_ratio * second) {
-      continue;
+  std::vector<const MapPoint*> points;
+  points.reserve(local_map_.points().size());
+  for (const auto& entry : local_map_.points()) points.push_back(&entry.second);  // id order
+
+  // Best map point for each key point; ties go to the lower point id, so that the result does
+  // not depend on how the points are split between threads.
+  using BestByKeypoint = std::unordered_map<int, Match>;
+  const auto keep_better = [](BestByKeypoint* best, const Match& m) {
+    auto [it, inserted] = best->try_emplace(m.keypoint, m);
+    if (!inserted && (m.distance < it->second.distance ||
+                      (m.distance == it->second.distance && m.point->id < it->second.point->id))) {
+      it->second = m;
     }
-    auto [it, inserted] = best_by_keypoint.try_emplace(best_index, Match{point, best_index, best});
-    if (!inserted && best < it->second.distance) it->second = Match{point, best_index, best};
+  };
+  const auto search = [&](std::size_t begin, std::size_t end, BestByKeypoint* best_by_keypoint) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const MapPoint* point = points[k];
+      const Eigen::Vector3d c = T_camera_world * point->position;
+      if (c.z() < 0.05) continue;
+      const double u = camera_.fx * c.x() / c.z() + camera_.cx;
+      const double v = camera_.fy * c.y() / c.z() + camera_.cy;
+      if (u < 0 || v < 0 || u >= camera_.size.width || v >= camera_.size.height) continue;
+      double best = std::numeric_limits<double>::max(), second = best;
+      int best_index = -1;
+      grid.ForEachWithin(u, v, radius, [&](int i) {
+        const double distance = features::DescriptorDistance(
+            point->descriptor, 0, features.descriptors, i, descriptor_norm_);
+        if (distance < best) {
+          second = best;
+          best = distance;
+          best_index = i;
+        } else if (distance < second) {
+          second = distance;
+        }
+      });
+      if (best_index < 0 || best > max_descriptor_distance_ ||
+          best > options_.match_ratio * second) {
+        continue;
+      }
+      keep_better(best_by_keypoint, Match{point, best_index, best});
+    }
+  };
+
+  BestByKeypoint best_by_keypoint;
+  if (options_.parallel) {
+    BestByKeypoint second_half;
+    const std::size_t middle = points.size() / 2;
+    std::future<void> worker =
+        std::async(std::launch::async, search, middle, points.size(), &second_half);
+    search(0, middle, &best_by_keypoint);
+    worker.get();
+    for (const auto& entry : second_half) keep_better(&best_by_keypoint, entry.second);
+  } else {
+    search(0, points.size(), &best_by_keypoint);
   }
   std::vector<Match> matches;
   matches.reserve(best_by_keypoint.size());

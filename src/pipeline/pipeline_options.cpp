@@ -20,7 +20,9 @@ void LoadInto(const std::string& path, PipelineOptions* options, int depth) {
   }
   options->ForEachSection([&](const std::string& section, auto& section_options) {
     known.insert(section);
-    io::YamlOptionReader reader(file, file.root()[section], section);
+    // An absent section keeps every default (yaml-cpp's node for a missing key is unusable).
+    const YAML::Node node = file.Has(file.root(), section) ? file.root()[section] : YAML::Node();
+    io::YamlOptionReader reader(file, node, section);
     section_options.Visit(reader);
     reader.RejectUnknownKeys();
   });

@@ -15,7 +15,7 @@
 namespace stereo_fabmap_slam::backend {
 
 struct BundleAdjustmentOptions {
-  int window = 10;          // keyframes optimised together
+  int window = 15;          // keyframes optimised together
   int fixed_keyframes = 1;  // the oldest keyframes of the window are held fixed (the gauge)
   int iterations = 10;      // Levenberg-Marquardt iterations a round
   int rounds = 2;           // optimise, remove outlier observations, optimise again

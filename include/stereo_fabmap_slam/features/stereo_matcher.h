@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -51,9 +52,17 @@ class StereoMatcher {
                            const cv::Mat& right_descriptors) const;
 
  private:
-  // 1 - zero-mean NCC of the patches around two integer pixels, or 2 if a patch leaves an image.
-  double PatchDistance(const cv::Mat& left_image, const cv::Point& left, const cv::Mat& right_image,
-                       const cv::Point& right) const;
+  // A left patch with its sums, computed once per key point.
+  struct Patch {
+    bool valid = false;
+    const cv::Mat* image = nullptr;
+    cv::Point centre;
+    std::int32_t sum = 0, sum_squares = 0;
+  };
+  Patch MakePatch(const cv::Mat& image, const cv::Point& centre) const;
+  // 1 - zero-mean NCC of a left patch and the right patch around an integer pixel, or 2 if a
+  // patch leaves its image or has no texture.
+  double PatchDistance(const Patch& left, const cv::Mat& right_image, const cv::Point& right) const;
   // Sub-pixel right column around a key-point match, or a negative value if the correlation has
   // no clear minimum inside the search window.
   float RefineColumn(const cv::Mat& left_image, const cv::Point2f& left_point,

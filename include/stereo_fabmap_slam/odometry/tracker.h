@@ -28,7 +28,8 @@ struct TrackerOptions {
   int min_inliers_ok = 50;    // fewer inliers: tracking weak
   int min_inliers_weak = 15;  // fewer inliers: tracking lost
   int min_map_points = 30;    // stereo points needed to start a map
-  int local_keyframes = 8;    // keyframes whose points the tracker searches
+  int local_keyframes = 16;   // recent keyframes whose points the tracker searches
+  bool parallel = true;       // search map points on two threads
   PoseRefinementOptions refinement;
 
   void Visit(io::OptionVisitor& visitor);
