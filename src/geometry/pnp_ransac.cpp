@@ -37,6 +37,27 @@ int OpenCvFlag(PnpKernel kernel) {
   return cv::SOLVEPNP_ITERATIVE;
 }
 
+void ToOpenCv(const Eigen::Isometry3d& T, cv::Mat* rotation_vector, cv::Mat* translation) {
+  const Eigen::AngleAxisd rotation(T.linear());
+  const Eigen::Vector3d axis = rotation.angle() * rotation.axis();
+  *rotation_vector = (cv::Mat_<double>(3, 1) << axis.x(), axis.y(), axis.z());
+  *translation =
+      (cv::Mat_<double>(3, 1) << T.translation().x(), T.translation().y(), T.translation().z());
+}
+
+Eigen::Isometry3d FromOpenCv(const cv::Mat& rotation_vector, const cv::Mat& translation) {
+  cv::Mat rotation;
+  cv::Rodrigues(rotation_vector, rotation);
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  cv::cv2eigen(rotation, r);
+  cv::cv2eigen(translation, t);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = r;
+  T.translation() = t;
+  return T;
+}
+
 double ReprojectionError(const PnpCorrespondence& c, const Eigen::Isometry3d& T_camera_world,
                          const camera::StereoCamera& camera) {
   const Eigen::Vector3d p = T_camera_world * c.world;
@@ -71,10 +92,15 @@ Eigen::Isometry3d FitRigid(const std::vector<PnpCorrespondence>& correspondences
 
 PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
                         const camera::StereoCamera& camera, const PnpRansacOptions& options) {
-  std::vector<int> with_depth;
+  // Hypotheses from close points only (within 40 baselines, where stereo depth is reliable),
+  // unless there are too few of them.
+  std::vector<int> with_depth, close;
   for (int i = 0; i < static_cast<int>(correspondences.size()); ++i) {
-    if (correspondences[i].has_depth) with_depth.push_back(i);
+    if (!correspondences[i].has_depth) continue;
+    with_depth.push_back(i);
+    if (correspondences[i].camera_point.z() < 40.0 * camera.baseline) close.push_back(i);
   }
+  if (close.size() >= 10) with_depth = close;
   PnpResult best;
   if (with_depth.size() < 3) return best;
   std::mt19937_64 random(options.seed);
@@ -100,17 +126,31 @@ PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
       iterations = std::min(options.max_iterations, static_cast<int>(std::ceil(needed)));
     }
   }
-  if (best.success) {
-    // Refit on the inliers that have depth.
-    std::vector<int> refit;
+  // Stereo depth errors grow with the square of the depth and dominate a 3-D fit; re-fit the
+  // consensus set by reprojection error instead (as OpenCV does for its own kernels), and again
+  // while the re-fitted pose gathers more inliers.
+  for (int refit = 0; refit < 3 && best.success && best.inliers.size() >= 6; ++refit) {
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
     for (const int i : best.inliers) {
-      if (correspondences[i].has_depth) refit.push_back(i);
+      const PnpCorrespondence& c = correspondences[i];
+      object.emplace_back(c.world.x(), c.world.y(), c.world.z());
+      image.emplace_back(c.pixel.x(), c.pixel.y());
     }
-    if (refit.size() >= 3) {
-      best.T_camera_world = FitRigid(correspondences, refit);
-      best.inliers =
-          Inliers(correspondences, best.T_camera_world, camera, options.reprojection_threshold);
+    cv::Mat rotation_vector, translation;
+    ToOpenCv(best.T_camera_world, &rotation_vector, &translation);
+    if (!cv::solvePnP(object, image, camera.CameraMatrix(), cv::noArray(), rotation_vector,
+                      translation, /*useExtrinsicGuess=*/true, cv::SOLVEPNP_ITERATIVE)) {
+      break;
     }
+    const Eigen::Isometry3d refined = FromOpenCv(rotation_vector, translation);
+    std::vector<int> inliers =
+        Inliers(correspondences, refined, camera, options.reprojection_threshold);
+    if (inliers.size() < best.inliers.size()) break;
+    const bool grew = inliers.size() > best.inliers.size();
+    best.T_camera_world = refined;
+    best.inliers = std::move(inliers);
+    if (!grew) break;
   }
   return best;
 }
@@ -157,14 +197,7 @@ PnpResult SolvePnpRansac(const std::vector<PnpCorrespondence>& correspondences,
                           inliers, OpenCvFlag(options.kernel))) {
     return result;
   }
-  cv::Mat rotation;
-  cv::Rodrigues(rotation_vector, rotation);
-  Eigen::Matrix3d r;
-  Eigen::Vector3d t;
-  cv::cv2eigen(rotation, r);
-  cv::cv2eigen(translation, t);
-  result.T_camera_world.linear() = r;
-  result.T_camera_world.translation() = t;
+  result.T_camera_world = FromOpenCv(rotation_vector, translation);
   // Inliers recounted with our own test, so that every kernel is judged the same way.
   result.inliers =
       Inliers(correspondences, result.T_camera_world, camera, options.reprojection_threshold);

@@ -1,0 +1,166 @@
+// Feature detection, ANMS and stereo matching on real EuRoC images.
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/features/adaptive_detector.h"
+#include "stereo_fabmap_slam/features/anms.h"
+#include "stereo_fabmap_slam/features/feature_factory.h"
+#include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
+#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+using namespace features;  // NOLINT: the module under test
+
+class RealStereoPair : public ::testing::Test {
+ protected:
+  RealStereoPair()
+      : sequence_(io::EurocSequence::Open(EurocSequencePath("MH01_first10s"))),
+        rectifier_(camera::StereoRectifier::FromCalibration(sequence_.calibration())) {
+    const io::StereoImages raw = sequence_.LoadStereoPair(100);
+    rectifier_.Rectify(raw.left, raw.right, &left_, &right_);
+  }
+
+  io::EurocSequence sequence_;
+  camera::StereoRectifier rectifier_;
+  cv::Mat left_, right_;
+};
+
+// Cells of an 8 x 6 grid over the image that hold at least one key point.
+int OccupiedCells(const std::vector<cv::KeyPoint>& keypoints, const cv::Size& size) {
+  std::set<int> cells;
+  for (const cv::KeyPoint& k : keypoints) {
+    cells.insert(static_cast<int>(k.pt.y * 6 / size.height) * 8 +
+                 static_cast<int>(k.pt.x * 8 / size.width));
+  }
+  return static_cast<int>(cells.size());
+}
+
+TEST_F(RealStereoPair, AnmsSpreadsKeyPointsOverTheImage) {
+  std::vector<cv::KeyPoint> corners;
+  cv::AgastFeatureDetector::create(10)->detect(left_, corners);
+  ASSERT_GT(corners.size(), 2000u);
+  const int available = OccupiedCells(corners, left_.size());
+  const std::vector<cv::KeyPoint> strongest = SelectStrongest(corners, 300);
+  const std::vector<cv::KeyPoint> spread = SelectWithAnms(corners, 300, left_.size(), 0.1);
+  EXPECT_NEAR(static_cast<double>(spread.size()), 300.0, 30.0);
+  const int strongest_cells = OccupiedCells(strongest, left_.size());
+  const int spread_cells = OccupiedCells(spread, left_.size());
+  RecordProperty("cells_strongest", strongest_cells);
+  RecordProperty("cells_anms", spread_cells);
+  // ANMS reaches nearly every cell that has a corner at all; the strongest 300 pile up on the
+  // most textured part of the hall and leave clearly more cells empty.
+  EXPECT_GE(spread_cells, 0.9 * available);
+  EXPECT_GE(spread_cells, strongest_cells + 5);
+}
+
+TEST(Anms, FewerPointsThanRequestedAreAllKept) {
+  std::vector<cv::KeyPoint> points = {{10, 10, 7, -1, 5}, {20, 20, 7, -1, 9}};
+  EXPECT_EQ(SelectWithAnms(points, 10, cv::Size(100, 100), 0.1).size(), 2u);
+  EXPECT_FLOAT_EQ(SelectStrongest(points, 1)[0].response, 9.0f);
+}
+
+TEST_F(RealStereoPair, BandDetectionEqualsWholeImage) {
+  FeatureOptions options;
+  options.adaptive_threshold = false;
+  const AdaptiveDetector detector(options, false);
+  const std::vector<cv::KeyPoint> whole = detector.DetectRows(left_, 0, left_.rows);
+  std::vector<cv::KeyPoint> bands = detector.DetectRows(left_, 0, 200);
+  const std::vector<cv::KeyPoint> lower = detector.DetectRows(left_, 200, left_.rows);
+  bands.insert(bands.end(), lower.begin(), lower.end());
+  const auto key = [](const cv::KeyPoint& k) {
+    return std::make_tuple(k.pt.y, k.pt.x, k.response);
+  };
+  std::vector<std::tuple<float, float, float>> a, b;
+  for (const auto& k : whole) a.push_back(key(k));
+  for (const auto& k : bands) b.push_back(key(k));
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  EXPECT_EQ(a, b);
+}
+
+TEST_F(RealStereoPair, TriangulatedDepthsAgreeWithDisparity) {
+  StereoFeatureExtractor extractor(FeatureOptions{}, StereoMatcherOptions{}, rectifier_.camera());
+  const StereoFeatures features = extractor.Extract(left_, right_);
+  ASSERT_GT(features.CountWithDepth(), 150);
+  const camera::StereoCamera& camera = rectifier_.camera();
+  std::vector<double> depths;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (!features.HasDepth(i)) continue;
+    const cv::Point2f& p = features.keypoints[i].pt;
+    const double disparity = p.x - features.u_right[i];
+    const Eigen::Vector3d& point = features.points[i];
+    ASSERT_GT(disparity, 0);
+    EXPECT_NEAR(point.z(), camera.fx * camera.baseline / disparity, 1e-9 * point.z());
+    EXPECT_GE(point.z(), StereoMatcherOptions{}.min_depth);
+    EXPECT_LE(point.z(), StereoMatcherOptions{}.max_depth);
+    // Re-projecting the point gives back the measured pixels in both images (to the precision
+    // of the float pixel coordinates).
+    const Eigen::Vector3d projected = camera.Project(point);
+    EXPECT_NEAR(projected.x(), p.x, 1e-4);
+    EXPECT_NEAR(projected.y(), p.y, 1e-4);
+    EXPECT_NEAR(projected.z(), features.u_right[i], 1e-4);
+    // And OpenCV's linear triangulation with the rectified projections agrees.
+    cv::Mat homogeneous;
+    cv::triangulatePoints(rectifier_.left_parameters().P, rectifier_.right_parameters().P,
+                          std::vector<cv::Point2f>{p},
+                          std::vector<cv::Point2f>{{features.u_right[i], p.y}}, homogeneous);
+    EXPECT_NEAR(homogeneous.at<float>(2) / homogeneous.at<float>(3), point.z(), 1e-3 * point.z());
+    depths.push_back(point.z());
+  }
+  // Frame 100 looks at structure about a metre away with the hall behind it: the depths spread
+  // over the configured range instead of collapsing to one end of it.
+  std::sort(depths.begin(), depths.end());
+  EXPECT_LT(depths[depths.size() / 10], 1.0);
+  EXPECT_GT(depths[depths.size() * 9 / 10], 2.0);
+}
+
+TEST_F(RealStereoPair, PatchAndDescriptorStereoMatchingAgree) {
+  FeatureOptions options;
+  options.adaptive_threshold = false;
+  StereoMatcherOptions patch, descriptor;
+  descriptor.mode = "descriptor";
+  StereoFeatureExtractor by_patch(options, patch, rectifier_.camera());
+  StereoFeatureExtractor by_descriptor(options, descriptor, rectifier_.camera());
+  const StereoFeatures a = by_patch.Extract(left_, right_);
+  const StereoFeatures b = by_descriptor.Extract(left_, right_);
+  ASSERT_EQ(a.size(), b.size());
+  int both = 0, agree = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!a.HasDepth(i) || !b.HasDepth(i)) continue;
+    ++both;
+    if (std::abs(a.u_right[i] - b.u_right[i]) < 0.5) ++agree;
+  }
+  ASSERT_GT(both, 100);
+  // Two independent ways of finding the right image point: they must find the same one.
+  EXPECT_GE(agree, 0.97 * both) << agree << " of " << both;
+}
+
+TEST(FeatureFactory, UnknownNamesListWhatIsAvailable) {
+  FeatureOptions options;
+  options.detector = "HARRIS";
+  try {
+    CreateDetector(options);
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("AGAST, FAST, ORB, AKAZE, SIFT"), std::string::npos);
+  }
+  options.detector = "AGAST";
+  options.descriptor = "SURF";
+  EXPECT_THROW(CreateDescriptor(options), std::invalid_argument);
+  for (const std::string& name : AvailableDescriptors()) {
+    options.descriptor = name;
+    options.detector = name == "AKAZE" ? "AKAZE" : "AGAST";
+    EXPECT_NO_THROW(CreateDescriptor(options)) << name;
+  }
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test

@@ -1,0 +1,89 @@
+// Every shipped configuration file parses; bad files are refused with file, line and reason.
+#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+
+#include <filesystem>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+template <typename Action>
+std::string ErrorOf(Action action) {
+  try {
+    action();
+  } catch (const std::exception& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(PipelineOptions, EveryShippedOdometryConfigParses) {
+  int parsed = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(RepositoryRoot() + "/config")) {
+    const std::string path = entry.path().string();
+    if (entry.path().extension() != ".yaml" || path.find("euroc_stereo") != std::string::npos)
+      continue;
+    EXPECT_NO_THROW(pipeline::LoadPipelineOptions(path)) << path;
+    ++parsed;
+  }
+  EXPECT_GE(parsed, 4);  // euroc.yaml and the three keyframe presets
+}
+
+TEST(PipelineOptions, DefaultsEqualTheShippedEurocFile) {
+  // config/euroc.yaml documents the defaults: printing both must give the same text.
+  std::ostringstream from_file, defaults;
+  pipeline::LoadPipelineOptions(RepositoryRoot() + "/config/euroc.yaml").Print(from_file);
+  pipeline::PipelineOptions{}.Print(defaults);
+  EXPECT_EQ(from_file.str(), defaults.str());
+}
+
+TEST(PipelineOptions, PresetsOverrideOnlyTheirSection) {
+  const pipeline::PipelineOptions base =
+      pipeline::LoadPipelineOptions(RepositoryRoot() + "/config/euroc.yaml");
+  const pipeline::PipelineOptions less =
+      pipeline::LoadPipelineOptions(RepositoryRoot() + "/config/keyframes_less.yaml");
+  const pipeline::PipelineOptions most =
+      pipeline::LoadPipelineOptions(RepositoryRoot() + "/config/keyframes_most.yaml");
+  EXPECT_GT(less.keyframes.max_translation, base.keyframes.max_translation);
+  EXPECT_LT(most.keyframes.max_translation, base.keyframes.max_translation);
+  EXPECT_EQ(less.features.max_features, base.features.max_features);
+  EXPECT_EQ(most.tracker.pnp_kernel, base.tracker.pnp_kernel);
+}
+
+TEST(PipelineOptions, BadFilesNameTheProblem) {
+  TemporaryDirectory temp;
+  const std::string path = temp.path() + "/bad.yaml";
+  WriteTextFile(path, "features:\n  detector: AGAST\n  max_featurs: 500\n");
+  std::string error = ErrorOf([&] { pipeline::LoadPipelineOptions(path); });
+  EXPECT_NE(error.find("unknown key(s) in 'features': max_featurs"), std::string::npos) << error;
+  EXPECT_NE(error.find(path + ":"), std::string::npos) << error;
+
+  WriteTextFile(path, "tracker:\n  ransac_threshold: fast\n");
+  error = ErrorOf([&] { pipeline::LoadPipelineOptions(path); });
+  EXPECT_NE(error.find(path + ":2: tracker.ransac_threshold must be a number"), std::string::npos)
+      << error;
+
+  WriteTextFile(path, "trackr:\n  ransac_threshold: 2\n");
+  error = ErrorOf([&] { pipeline::LoadPipelineOptions(path); });
+  EXPECT_NE(error.find("unknown section 'trackr'"), std::string::npos) << error;
+
+  WriteTextFile(path, "tracker:\n  pnp_kernel: DLT\n");
+  error = ErrorOf([&] { pipeline::LoadPipelineOptions(path); });
+  EXPECT_NE(error.find("ITERATIVE, EPNP, AP3P, P3P, SQPNP, UMEYAMA"), std::string::npos) << error;
+
+  WriteTextFile(path, "backend:\n  window: 1\n");
+  error = ErrorOf([&] { pipeline::LoadPipelineOptions(path); });
+  EXPECT_NE(error.find("backend.window"), std::string::npos) << error;
+
+  WriteTextFile(path, "include: missing.yaml\n");
+  error = ErrorOf([&] { pipeline::LoadPipelineOptions(path); });
+  EXPECT_NE(error.find("missing.yaml: cannot open file"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
