@@ -2,6 +2,7 @@
 #   make demo   install what is missing, build, run the demo
 #   make test   install what is missing, build, run every test (gtest + rostest)
 #   make build  build only; every tool is then build/bin/<tool>
+#   make bench  benchmark figures for docs/benchmarks.md
 # Use the ROS side (roslaunch, rosrun, nodelets) after `source build/ws/devel/setup.bash`.
 SHELL := /bin/bash
 .DEFAULT_GOAL := build
@@ -37,7 +38,7 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_DEVEL_PREFIX=$(WS)/devel -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
 CMAKE_BUILD := cmake --build $(WS)/build --
 
-.PHONY: deps build test demo clean format
+.PHONY: deps build test demo bench clean format
 
 deps:
 	@missing=$$(for p in $(DEBIAN_PACKAGES); do \
@@ -66,6 +67,10 @@ test: build
 
 demo: build
 	bash scripts/demo.sh
+
+# Speed and accuracy figures (docs/benchmarks.md records them); never part of `make test`.
+bench: build
+	bash scripts/bench.sh
 
 clean:
 	rm -rf build

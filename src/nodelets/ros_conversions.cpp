@@ -1,5 +1,6 @@
 #include "ros_conversions.h"
 
+#include <cstring>
 #include <stdexcept>
 
 #include <cv_bridge/cv_bridge.h>
@@ -74,6 +75,156 @@ camera::StereoRectifier RectifierFromCameraInfo(const sensor_msgs::CameraInfo& l
                                                 const Eigen::Isometry3d& T_body_left_raw) {
   return camera::StereoRectifier::FromParameters(FromCameraInfo(left), FromCameraInfo(right),
                                                  T_body_left_raw);
+}
+
+stereo_fabmap_slam::Keyframe ToKeyframeMessage(const odometry::KeyframeData& keyframe,
+                                               const camera::StereoCamera& camera,
+                                               const std::string& frame_id) {
+  stereo_fabmap_slam::Keyframe message;
+  message.header.stamp.fromSec(keyframe.timestamp);
+  message.header.frame_id = frame_id;
+  message.id = static_cast<std::uint64_t>(keyframe.id);
+  message.starts_new_map = keyframe.starts_new_map;
+  message.pose = ToPoseMessage(keyframe.T_world_camera);
+  message.fx = camera.fx;
+  message.fy = camera.fy;
+  message.cx = camera.cx;
+  message.cy = camera.cy;
+  message.baseline = camera.baseline;
+  message.width = static_cast<std::uint32_t>(camera.size.width);
+  message.height = static_cast<std::uint32_t>(camera.size.height);
+  const features::StereoFeatures& f = keyframe.features;
+  const std::size_t n = f.size();
+  message.u.resize(n);
+  message.v.resize(n);
+  message.u_right.assign(f.u_right.begin(), f.u_right.end());
+  message.points.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    message.u[i] = f.keypoints[i].pt.x;
+    message.v[i] = f.keypoints[i].pt.y;
+    message.points[i].x = static_cast<float>(f.points[i].x());
+    message.points[i].y = static_cast<float>(f.points[i].y());
+    message.points[i].z = static_cast<float>(f.points[i].z());
+  }
+  const cv::Mat descriptors = f.descriptors.isContinuous() ? f.descriptors : f.descriptors.clone();
+  message.descriptors_are_float = descriptors.type() == CV_32F;
+  message.descriptor_bytes = static_cast<std::uint32_t>(descriptors.cols * descriptors.elemSize());
+  message.descriptors.assign(descriptors.data,
+                             descriptors.data + descriptors.total() * descriptors.elemSize());
+  message.map_point_ids.assign(keyframe.map_point_ids.begin(), keyframe.map_point_ids.end());
+  return message;
+}
+
+odometry::KeyframeData FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message) {
+  const std::size_t n = message.u.size();
+  if (message.v.size() != n || message.u_right.size() != n || message.points.size() != n ||
+      message.map_point_ids.size() != n ||
+      message.descriptors.size() != n * message.descriptor_bytes) {
+    throw std::invalid_argument("Keyframe message: arrays of different lengths");
+  }
+  odometry::KeyframeData keyframe;
+  keyframe.id = static_cast<std::int64_t>(message.id);
+  keyframe.timestamp = message.header.stamp.toSec();
+  keyframe.T_world_camera = FromPoseMessage(message.pose);
+  keyframe.starts_new_map = message.starts_new_map;
+  features::StereoFeatures& f = keyframe.features;
+  f.keypoints.resize(n);
+  f.points.resize(n);
+  f.u_right.assign(message.u_right.begin(), message.u_right.end());
+  for (std::size_t i = 0; i < n; ++i) {
+    f.keypoints[i] = cv::KeyPoint(message.u[i], message.v[i], 7.0f);
+    f.points[i] = Eigen::Vector3d(message.points[i].x, message.points[i].y, message.points[i].z);
+  }
+  const int element = message.descriptors_are_float ? CV_32F : CV_8U;
+  const int columns =
+      static_cast<int>(message.descriptor_bytes / (message.descriptors_are_float ? 4 : 1));
+  f.descriptors = cv::Mat(static_cast<int>(n), columns, element);
+  if (!message.descriptors.empty()) {
+    std::memcpy(f.descriptors.data, message.descriptors.data(), message.descriptors.size());
+  }
+  keyframe.map_point_ids.assign(message.map_point_ids.begin(), message.map_point_ids.end());
+  return keyframe;
+}
+
+camera::StereoCamera CameraOfKeyframe(const stereo_fabmap_slam::Keyframe& message) {
+  camera::StereoCamera camera;
+  camera.size = cv::Size(static_cast<int>(message.width), static_cast<int>(message.height));
+  camera.fx = message.fx;
+  camera.fy = message.fy;
+  camera.cx = message.cx;
+  camera.cy = message.cy;
+  camera.baseline = message.baseline;
+  return camera;
+}
+
+stereo_fabmap_slam::KeyframeUpdate ToKeyframeUpdateMessage(const odometry::KeyframeUpdate& update) {
+  stereo_fabmap_slam::KeyframeUpdate message;
+  for (const auto& [id, pose] : update.keyframe_poses) {
+    message.keyframe_ids.push_back(static_cast<std::uint64_t>(id));
+    message.keyframe_poses.push_back(ToPoseMessage(pose));
+  }
+  for (const auto& [id, position] : update.point_positions) {
+    message.point_ids.push_back(id);
+    geometry_msgs::Point point;
+    point.x = position.x();
+    point.y = position.y();
+    point.z = position.z();
+    message.point_positions.push_back(point);
+  }
+  message.removed_point_ids.assign(update.removed_points.begin(), update.removed_points.end());
+  return message;
+}
+
+odometry::KeyframeUpdate FromKeyframeUpdateMessage(
+    const stereo_fabmap_slam::KeyframeUpdate& message) {
+  if (message.keyframe_ids.size() != message.keyframe_poses.size() ||
+      message.point_ids.size() != message.point_positions.size()) {
+    throw std::invalid_argument("KeyframeUpdate message: arrays of different lengths");
+  }
+  odometry::KeyframeUpdate update;
+  for (std::size_t i = 0; i < message.keyframe_ids.size(); ++i) {
+    update.keyframe_poses.emplace_back(static_cast<std::int64_t>(message.keyframe_ids[i]),
+                                       FromPoseMessage(message.keyframe_poses[i]));
+  }
+  for (std::size_t i = 0; i < message.point_ids.size(); ++i) {
+    const geometry_msgs::Point& p = message.point_positions[i];
+    update.point_positions.emplace_back(message.point_ids[i], Eigen::Vector3d(p.x, p.y, p.z));
+  }
+  update.removed_points.assign(message.removed_point_ids.begin(), message.removed_point_ids.end());
+  return update;
+}
+
+RosParameterReader::RosParameterReader(const ros::NodeHandle& node, const std::string& section)
+    : node_(node), section_(section) {}
+
+template <typename T>
+void RosParameterReader::Get(const std::string& key, T* value, const char* expected) {
+  const std::string name = section_ + "/" + key;
+  if (!node_.hasParam(name)) return;
+  if (!node_.getParam(name, *value)) {
+    throw std::invalid_argument("parameter " + node_.resolveName(name) + " must be " + expected);
+  }
+}
+
+void RosParameterReader::Visit(const std::string& key, double* value) {
+  // Accept integers for real-valued fields (YAML "2" for 2.0).
+  const std::string name = section_ + "/" + key;
+  int whole = 0;
+  if (node_.hasParam(name) && !node_.getParam(name, *value) && node_.getParam(name, whole)) {
+    *value = whole;
+    return;
+  }
+  Get(key, value, "a number");
+}
+
+void RosParameterReader::Visit(const std::string& key, int* value) {
+  Get(key, value, "a whole number");
+}
+void RosParameterReader::Visit(const std::string& key, bool* value) {
+  Get(key, value, "true or false");
+}
+void RosParameterReader::Visit(const std::string& key, std::string* value) {
+  Get(key, value, "a string");
 }
 
 }  // namespace stereo_fabmap_slam::ros_conversions

@@ -12,7 +12,13 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include <ros/node_handle.h>
+#include <stereo_fabmap_slam/Keyframe.h>
+#include <stereo_fabmap_slam/KeyframeUpdate.h>
+
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/odometry/keyframe_data.h"
 
 namespace stereo_fabmap_slam::ros_conversions {
 
@@ -37,5 +43,35 @@ sensor_msgs::CameraInfo ToCameraInfo(const camera::RectificationParameters& para
 camera::StereoRectifier RectifierFromCameraInfo(const sensor_msgs::CameraInfo& left,
                                                 const sensor_msgs::CameraInfo& right,
                                                 const Eigen::Isometry3d& T_body_left_raw);
+
+// Keyframes and backend updates. The camera travels with each keyframe so that consumers need
+// no calibration of their own.
+stereo_fabmap_slam::Keyframe ToKeyframeMessage(const odometry::KeyframeData& keyframe,
+                                               const camera::StereoCamera& camera,
+                                               const std::string& frame_id);
+odometry::KeyframeData FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message);
+camera::StereoCamera CameraOfKeyframe(const stereo_fabmap_slam::Keyframe& message);
+stereo_fabmap_slam::KeyframeUpdate ToKeyframeUpdateMessage(const odometry::KeyframeUpdate& update);
+odometry::KeyframeUpdate FromKeyframeUpdateMessage(
+    const stereo_fabmap_slam::KeyframeUpdate& message);
+
+// Fills Options fields from ROS parameters "<namespace>/<section>/<key>" (e.g. the private
+// "~features/max_features" after `rosparam load config/euroc.yaml`); absent parameters keep the
+// default, a parameter of the wrong type throws std::invalid_argument naming it.
+class RosParameterReader : public io::OptionVisitor {
+ public:
+  RosParameterReader(const ros::NodeHandle& node, const std::string& section);
+  void Visit(const std::string& key, double* value) override;
+  void Visit(const std::string& key, int* value) override;
+  void Visit(const std::string& key, bool* value) override;
+  void Visit(const std::string& key, std::string* value) override;
+
+ private:
+  template <typename T>
+  void Get(const std::string& key, T* value, const char* expected);
+
+  ros::NodeHandle node_;
+  std::string section_;
+};
 
 }  // namespace stereo_fabmap_slam::ros_conversions

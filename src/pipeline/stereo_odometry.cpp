@@ -4,40 +4,22 @@ namespace stereo_fabmap_slam::pipeline {
 
 StereoOdometry::StereoOdometry(const PipelineOptions& options,
                                const camera::StereoRectifier& rectifier, Clock clock)
-    : rectifier_(rectifier),
-      clock_(std::move(clock)),
-      extractor_(options.features, options.stereo, rectifier.camera()),
-      tracker_(options.tracker, options.keyframes, rectifier.camera(), extractor_.descriptor_norm(),
-               extractor_.max_match_distance()),
+    : clock_(clock),
+      front_end_(options, rectifier, clock),
       bundle_adjuster_(options.backend, rectifier.camera()) {}
 
 const FrameRecord& StereoOdometry::ProcessFrame(double timestamp, const cv::Mat& left_raw,
                                                 const cv::Mat& right_raw) {
+  FrontEndOutput output = front_end_.Process(timestamp, left_raw, right_raw);
+  const odometry::TrackingResult& result = output.tracking;
   FrameRecord record;
   record.timestamp = timestamp;
-  FrameTiming& timing = record.timing;
-  double start = clock_();
-  const auto lap = [&](double* stage) {
-    const double now = clock_();
-    *stage = now - start;
-    start = now;
-  };
-  cv::Mat left, right;
-  rectifier_.Rectify(left_raw, right_raw, &left, &right);
-  lap(&timing.rectification_ms);
-  features::StereoFeatureExtractor::Detected detected = extractor_.Detect(left, right);
-  lap(&timing.detection_ms);
-  features::StereoFeatureExtractor::Described described =
-      extractor_.Describe(left, right, std::move(detected));
-  lap(&timing.description_ms);
-  features::StereoFeatures features = extractor_.Match(left, right, std::move(described));
-  lap(&timing.stereo_ms);
-  odometry::TrackingResult result = tracker_.Track(timestamp, std::move(features));
-  lap(&timing.tracking_ms);
+  record.timing = output.timing;
   if (result.keyframe) {
+    const double start = clock_();
     keyframe_times_[result.keyframe->id] = timestamp;
-    tracker_.ApplyUpdate(bundle_adjuster_.AddKeyframe(*result.keyframe));
-    lap(&timing.bundle_adjustment_ms);
+    front_end_.ApplyUpdate(bundle_adjuster_.AddKeyframe(*result.keyframe));
+    record.timing.bundle_adjustment_ms = clock_() - start;
   }
   record.state = result.state;
   record.T_world_camera = result.T_world_camera;

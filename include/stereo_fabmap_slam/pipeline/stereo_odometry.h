@@ -10,19 +10,9 @@
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/evaluation/trajectory.h"
-#include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
-#include "stereo_fabmap_slam/odometry/tracker.h"
-#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 
 namespace stereo_fabmap_slam::pipeline {
-
-// Milliseconds spent per stage of one frame.
-struct FrameTiming {
-  double rectification_ms = 0, detection_ms = 0, description_ms = 0, stereo_ms = 0, tracking_ms = 0,
-         bundle_adjustment_ms = 0;
-  // Detection to refined pose: what a frame costs before the next one can be tracked.
-  double TrackingTotal() const { return detection_ms + description_ms + stereo_ms + tracking_ms; }
-};
 
 struct FrameRecord {
   double timestamp = 0;
@@ -36,12 +26,12 @@ struct FrameRecord {
   FrameTiming timing;
 };
 
-// The whole odometry in one thread, frame by frame: rectify, extract, track, and on a keyframe
-// run the windowed bundle adjustment and hand its update back to the tracker. The same input
+// The whole odometry in one thread, frame by frame: the front end, and on a keyframe the
+// windowed bundle adjustment, whose update goes straight back to the tracker. The same input
 // gives the same output. The clock (milliseconds) is only read to fill FrameTiming.
 class StereoOdometry {
  public:
-  using Clock = std::function<double()>;
+  using Clock = StereoFrontEnd::Clock;
 
   StereoOdometry(const PipelineOptions& options, const camera::StereoRectifier& rectifier,
                  Clock clock);
@@ -57,10 +47,8 @@ class StereoOdometry {
   std::size_t keyframe_count() const { return keyframe_times_.size(); }
 
  private:
-  const camera::StereoRectifier& rectifier_;
   Clock clock_;
-  features::StereoFeatureExtractor extractor_;
-  odometry::Tracker tracker_;
+  StereoFrontEnd front_end_;
   backend::LocalBundleAdjuster bundle_adjuster_;
   std::vector<FrameRecord> frames_;
   std::map<std::int64_t, double> keyframe_times_;

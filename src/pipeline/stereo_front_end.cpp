@@ -1,0 +1,38 @@
+#include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+
+namespace stereo_fabmap_slam::pipeline {
+
+StereoFrontEnd::StereoFrontEnd(const PipelineOptions& options, camera::StereoRectifier rectifier,
+                               Clock clock)
+    : rectifier_(std::move(rectifier)),
+      clock_(std::move(clock)),
+      extractor_(options.features, options.stereo, rectifier_.camera()),
+      tracker_(options.tracker, options.keyframes, rectifier_.camera(),
+               extractor_.descriptor_norm(), extractor_.max_match_distance()) {}
+
+FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw,
+                                       const cv::Mat& right_raw) {
+  FrontEndOutput output;
+  FrameTiming& timing = output.timing;
+  double start = clock_();
+  const auto lap = [&](double* stage) {
+    const double now = clock_();
+    *stage = now - start;
+    start = now;
+  };
+  cv::Mat left, right;
+  rectifier_.Rectify(left_raw, right_raw, &left, &right);
+  lap(&timing.rectification_ms);
+  features::StereoFeatureExtractor::Detected detected = extractor_.Detect(left, right);
+  lap(&timing.detection_ms);
+  features::StereoFeatureExtractor::Described described =
+      extractor_.Describe(left, right, std::move(detected));
+  lap(&timing.description_ms);
+  features::StereoFeatures features = extractor_.Match(left, right, std::move(described));
+  lap(&timing.stereo_ms);
+  output.tracking = tracker_.Track(timestamp, std::move(features));
+  lap(&timing.tracking_ms);
+  return output;
+}
+
+}  // namespace stereo_fabmap_slam::pipeline
