@@ -1,6 +1,8 @@
 // StereoTracker: synchronised raw stereo images in, odometry, tf odom -> camera and keyframes out.
 // Everything algorithmic is pipeline::StereoFrontEnd; this file converts and publishes.
+#include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -41,6 +43,8 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
                     const sensor_msgs::CameraInfoConstPtr& right);
   void OnImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
   void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
+  // Counts images of one side; warns when more go unpaired than the sync queue can hold.
+  void OnSingleImage(std::atomic<std::uint64_t>* count);
   void Publish(const ros::Time& stamp, const odometry::TrackingResult& result);
 
   pipeline::PipelineOptions options_;
@@ -48,6 +52,8 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   std::mutex mutex_;  // image and update callbacks may run on different manager threads
   std::unique_ptr<pipeline::StereoFrontEnd> front_end_;
   ros::Time last_stamp_;
+  int queue_size_ = 10;
+  std::atomic<std::uint64_t> left_images_{0}, right_images_{0}, pairs_{0};
 
   message_filters::Subscriber<Image> left_subscriber_, right_subscriber_;
   message_filters::Subscriber<sensor_msgs::CameraInfo> left_info_subscriber_,
@@ -95,6 +101,7 @@ void StereoTrackerNodelet::onInit() {
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
   camera_frame_ = private_node.param<std::string>("camera_frame", "camera");
   const int queue_size = private_node.param("queue_size", 10);
+  queue_size_ = queue_size;
   const bool approximate = private_node.param("approximate_sync", false);
   const bool use_camera_info = private_node.param("use_camera_info", false);
 
@@ -130,6 +137,10 @@ void StereoTrackerNodelet::onInit() {
 
   left_subscriber_.subscribe(node, "left/image_raw", queue_size);
   right_subscriber_.subscribe(node, "right/image_raw", queue_size);
+  left_subscriber_.registerCallback(
+      [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(&left_images_); });
+  right_subscriber_.registerCallback(
+      [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(&right_images_); });
   if (approximate) {
     approximate_sync_ = std::make_unique<message_filters::Synchronizer<ApproximatePolicy>>(
         ApproximatePolicy(queue_size), left_subscriber_, right_subscriber_);
@@ -159,8 +170,21 @@ void StereoTrackerNodelet::OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& l
   }
 }
 
+void StereoTrackerNodelet::OnSingleImage(std::atomic<std::uint64_t>* count) {
+  const std::uint64_t unpaired = ++*count - pairs_.load();
+  if (unpaired > static_cast<std::uint64_t>(queue_size_)) {
+    NODELET_WARN_THROTTLE(5,
+                          "left/right images do not synchronise (%lu left, %lu right, %lu pairs); "
+                          "stamps must be equal, or set ~approximate_sync",
+                          static_cast<unsigned long>(left_images_.load()),
+                          static_cast<unsigned long>(right_images_.load()),
+                          static_cast<unsigned long>(pairs_.load()));
+  }
+}
+
 void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_message,
                                     const sensor_msgs::ImageConstPtr& right_message) {
+  ++pairs_;
   std::lock_guard<std::mutex> lock(mutex_);
   if (!front_end_) {
     NODELET_WARN_THROTTLE(5, "no calibration yet (waiting for camera_info); frame skipped");
