@@ -5,11 +5,8 @@
 #include <optional>
 #include <string>
 
-#include <geometry_msgs/PoseStamped.h>
-#include <rosbag/bag.h>
-
 #include "command_line.h"
-#include "ros_conversions.h"
+#include "euroc_bag_writer.h"
 #include "stereo_fabmap_slam/io/euroc_sequence.h"
 
 namespace {
@@ -21,37 +18,6 @@ constexpr char kUsage[] =
     "Writes /cam0/image_raw and /cam1/image_raw (sensor_msgs/Image, mono8, frame ids cam0 and\n"
     "cam1) and, when ASL_DIR has ground truth, /ground_truth (geometry_msgs/PoseStamped, body\n"
     "frame in 'world').\n";
-
-void WriteGroundTruth(const evaluation::StampedPose& body, rosbag::Bag* bag) {
-  geometry_msgs::PoseStamped message;
-  message.header.stamp.fromSec(body.timestamp);
-  message.header.frame_id = "world";
-  message.pose = ros_conversions::ToPoseMessage(body.pose);
-  bag->write("/ground_truth", message.header.stamp, message);
-}
-
-// Writes messages in time order, as a recorded bag has them: ground truth runs at 200 Hz and
-// starts before the first image and ends after the last.
-void WriteBag(const io::EurocSequence& sequence, const std::string& bag_path) {
-  rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
-  const evaluation::Trajectory& truth = sequence.ground_truth();
-  std::size_t next_truth = 0;
-  for (std::size_t i = 0; i < sequence.size(); ++i) {
-    const io::StereoImages images = sequence.LoadStereoPair(i);
-    const ros::Time stamp = ros_conversions::ToRosTime(images.timestamp_ns);
-    for (; next_truth < truth.size() && truth[next_truth].timestamp <= stamp.toSec();
-         ++next_truth) {
-      WriteGroundTruth(truth[next_truth], &bag);
-    }
-    bag.write("/cam0/image_raw", stamp,
-              ros_conversions::ToMono8ImageMessage(images.left, stamp, "cam0"));
-    bag.write("/cam1/image_raw", stamp,
-              ros_conversions::ToMono8ImageMessage(images.right, stamp, "cam1"));
-    if ((i + 1) % 500 == 0) std::fprintf(stderr, "  %zu / %zu frames\n", i + 1, sequence.size());
-  }
-  for (; next_truth < truth.size(); ++next_truth) WriteGroundTruth(truth[next_truth], &bag);
-  bag.close();
-}
 
 }  // namespace
 
@@ -74,7 +40,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "euroc_to_bag: warning: %s image %s has no partner, skipped\n",
                    image.camera.c_str(), image.path.c_str());
     }
-    WriteBag(sequence, args->positional()[1]);
+    ros_conversions::WriteEurocBag(sequence, args->positional()[1]);
     std::printf("wrote %s: %zu stereo pairs, %zu ground-truth poses\n",
                 args->positional()[1].c_str(), sequence.size(), sequence.ground_truth().size());
   } catch (const std::exception& error) {
