@@ -2,30 +2,43 @@
 # The body of `make demo`, run after `make build`: the real ROS graph, headless, on the default
 # sequence, then an evaluation against ground truth. Files go to output/demo/.
 #
-# The default sequence is the EuRoC subset in the shared data folder until the project renders
-# its own (the synthetic-world issue); DEMO_SEQUENCE=<ASL folder> picks another. RVIZ=1 opens rviz.
+# The default sequence is rendered by the project itself (make_synthetic_sequence: the textured
+# hall, route "loop", 40 s, seed 1) on the first run and cached; nothing is downloaded.
+# DEMO_SEQUENCE=<EuRoC ASL folder> plays a real sequence instead; DEMO_RATE sets the playback
+# speed (default 1); RVIZ=1 opens rviz.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH=/usr/bin:$PATH
 BIN=build/bin
 OUT=output/demo
-DATA=${STEREO_FABMAP_SLAM_DATA:-../shared/data}
-SEQUENCE=${DEMO_SEQUENCE:-$DATA/euroc/MH01_first10s}
-NAME=$(basename "$SEQUENCE")
+RATE=${DEMO_RATE:-1}
 mkdir -p "$OUT"
-if [ ! -d "$SEQUENCE/mav0" ]; then
-  echo "demo: no EuRoC sequence at $SEQUENCE (set DEMO_SEQUENCE=<ASL folder>)" >&2
-  exit 1
-fi
 SECONDS=0
-
-bag="$OUT/$NAME.bag"
-if [ ! -f "$bag" ] || [ -n "$(find "$SEQUENCE/mav0" -newer "$bag" -print -quit)" ]; then
-  echo "== converting $SEQUENCE to $bag"
-  "$BIN/euroc_to_bag" "$SEQUENCE" "$bag"
+if [ -n "${DEMO_SEQUENCE:-}" ]; then
+  SEQUENCE=$DEMO_SEQUENCE
+  NAME=$(basename "$SEQUENCE")
+  [ -d "$SEQUENCE/mav0" ] || { echo "demo: no EuRoC sequence at $SEQUENCE" >&2; exit 1; }
+  bag="$OUT/$NAME.bag"
+  if [ ! -f "$bag" ] || [ -n "$(find "$SEQUENCE/mav0" -newer "$bag" -print -quit)" ]; then
+    echo "== converting $SEQUENCE to $bag"
+    "$BIN/euroc_to_bag" "$SEQUENCE" "$bag"
+  fi
 else
-  echo "== using cached $bag"
+  NAME=synthetic_loop
+  SEQUENCE=$OUT/$NAME
+  bag=$SEQUENCE/sequence.bag
+  if [ ! -f "$bag" ] || [ "$BIN/make_synthetic_sequence" -nt "$bag" ]; then
+    echo "== rendering the synthetic hall (route loop, 40 s; cached for later runs)"
+    rm -rf "$SEQUENCE"
+    render_start=$SECONDS
+    "$BIN/make_synthetic_sequence" --out "$SEQUENCE" --route loop --seconds 40 --seed 1 > /dev/null
+    echo "   rendered 800 stereo frames in $((SECONDS - render_start)) s"
+  fi
 fi
+echo "== using $bag"
+# A rendered sequence brings its rig's calibration; EuRoC sequences share config/euroc_stereo.yaml.
+calibration=$PWD/config/euroc_stereo.yaml
+[ -f "$SEQUENCE/stereo_calibration.yaml" ] && calibration=$PWD/$SEQUENCE/stereo_calibration.yaml
 
 # A private master on a free port, so that the demo neither needs nor disturbs a running ROS.
 set +u; source build/ws/devel/setup.bash; set -u  # setup files read unset variables
@@ -43,8 +56,9 @@ rosbag record -q -O "$OUT/recorded.bag" /odometry /keyframes /keyframe_updates >
 recorder_pid=$!
 sleep 1
 graph_start=$SECONDS
-if [ "${RVIZ:-0}" = 1 ]; then rviz > "$OUT/rviz.log" 2>&1 & fi
-roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" > "$OUT/roslaunch.log" 2>&1 || {
+if [ "${RVIZ:-0}" = 1 ]; then rviz -d config/stereo_fabmap_slam.rviz > "$OUT/rviz.log" 2>&1 & fi
+roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$RATE" calibration:="$calibration" \
+  > "$OUT/roslaunch.log" 2>&1 || {
   echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
 graph_seconds=$((SECONDS - graph_start))
 sleep 1
@@ -52,10 +66,15 @@ kill -INT "$recorder_pid"; wait "$recorder_pid" 2> /dev/null || true
 recorder_pid=
 
 echo "== evaluating against ground truth"
-/usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/trajectory.txt" > "$OUT/topics.txt"
+/usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/trajectory.txt" \
+  "$OUT/keyframes.txt" > "$OUT/topics.txt"
 "$BIN/evaluate_trajectory" --gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" \
   --gt-to-camera "$SEQUENCE/mav0/cam0/sensor.yaml" --est "$OUT/trajectory.txt" \
-  --plot "$OUT/trajectory.png" > "$OUT/evaluation.txt"
+  --keyframes "$OUT/keyframes.txt" --plot "$OUT/trajectory.png" > "$OUT/evaluation.txt"
+loops_present="unknown (real data)"
+if [ -f "$SEQUENCE/mav0/synthetic.yaml" ]; then
+  loops_present=$(sed -n 's/^revisits: \[\(.*\)\]/\1/p' "$SEQUENCE/mav0/synthetic.yaml" | awk -F, 'NF == 0 {print 0} NF > 0 {print NF}')
+fi
 frames=$(grep -c . "$SEQUENCE/mav0/cam0/data.csv"); frames=$((frames - 1))
 odometry=$(awk '$1 == "/odometry" {print $2}' "$OUT/topics.txt")
 keyframes=$(awk '$1 == "/keyframes" {print $2}' "$OUT/topics.txt")
@@ -66,8 +85,8 @@ echo "  frames played           $frames"
 echo "  odometry messages       $odometry"
 echo "  keyframes               ${keyframes:-0}"
 echo "  ATE RMSE (SE3)          $ate cm"
-echo "  loops found / present   - (place recognition not built yet)"
+echo "  loops found / present   - / $loops_present (place recognition not built yet)"
 echo "  relocalization          - (not built yet)"
-echo "  ROS graph run time      ${graph_seconds} s (bag of $(rosbag info -y -k duration "$bag" | cut -c1-5) s at rate 1)"
-echo "  files                   $OUT/trajectory.txt, $OUT/trajectory.png, $OUT/evaluation.txt"
+echo "  ROS graph run time      ${graph_seconds} s (bag of $(rosbag info -y -k duration "$bag" | cut -c1-5) s at rate $RATE)"
+echo "  files                   $OUT/trajectory.txt, keyframes.txt, trajectory.png, evaluation.txt"
 echo "== demo done in ${SECONDS} s"

@@ -1,6 +1,8 @@
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 
 #include <cmath>
+#include <fstream>
+#include <iomanip>
 #include <stdexcept>
 
 #include "stereo_fabmap_slam/io/csv_reader.h"
@@ -35,7 +37,50 @@ Eigen::Isometry3d ParseTransform(const io::YamlFile& file, const YAML::Node& nod
   return transform;
 }
 
+// One camera in sensor.yaml form, every line prefixed by `indent`.
+void WriteCamera(const CameraCalibration& camera, const std::string& comment,
+                 const std::string& indent, std::ostream& out) {
+  out << std::setprecision(15);
+  out << indent << "comment: " << comment << "\n"
+      << indent << "T_BS:\n"
+      << indent << "  cols: 4\n"
+      << indent << "  rows: 4\n"
+      << indent << "  data: [";
+  const Eigen::Matrix4d T = camera.T_body_camera.matrix();
+  for (int i = 0; i < 16; ++i) out << T(i / 4, i % 4) << (i < 15 ? ", " : "]\n");
+  out << indent << "rate_hz: " << camera.rate_hz << "\n"
+      << indent << "resolution: [" << camera.resolution.width << ", " << camera.resolution.height
+      << "]\n"
+      << indent << "camera_model: pinhole\n"
+      << indent << "intrinsics: [" << camera.fx << ", " << camera.fy << ", " << camera.cx << ", "
+      << camera.cy << "]  # fu, fv, cu, cv\n"
+      << indent << "distortion_model: radial-tangential\n"
+      << indent << "distortion_coefficients: [";
+  for (std::size_t i = 0; i < camera.distortion.size(); ++i) {
+    out << camera.distortion[i] << (i + 1 < camera.distortion.size() ? ", " : "]\n");
+  }
+}
+
 }  // namespace
+
+void WriteEurocSensorYaml(const CameraCalibration& camera, const std::string& comment,
+                          const std::string& path) {
+  std::ofstream out(path);
+  out << "# General sensor definitions.\nsensor_type: camera\n";
+  WriteCamera(camera, comment, "", out);
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+void WriteStereoCalibrationYaml(const StereoCalibration& calibration, const std::string& path) {
+  std::ofstream out(path);
+  out << "# Stereo calibration in sensor.yaml form (left = cam0, right = cam1); T_BS is each "
+         "camera's\n"
+         "# pose in the body frame.\nleft:\n";
+  WriteCamera(calibration.left, "left camera", "  ", out);
+  out << "\nright:\n";
+  WriteCamera(calibration.right, "right camera", "  ", out);
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
 
 cv::Matx33d CameraCalibration::CameraMatrix() const {
   return cv::Matx33d(fx, 0, cx, 0, fy, cy, 0, 0, 1);

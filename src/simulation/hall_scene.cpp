@@ -150,8 +150,10 @@ float HallScene::Shade(const Box& box, int face, const Eigen::Vector3f& point, f
                                      : std::min(std::ilogb(footprint),
                                                 static_cast<int>(texture.levels.size()) - 1);
   const float scale = texture.scales[static_cast<std::size_t>(level)];
+  // Texel i covers [i, i + 1) of the texture; its value belongs to its centre, i + 0.5.
   return material.shade * Bilinear(texture.levels[static_cast<std::size_t>(level)],
-                                   (u - column) * full.cols * scale, (v - row) * full.rows * scale);
+                                   (u - column) * full.cols * scale - 0.5f,
+                                   (v - row) * full.rows * scale - 0.5f);
 }
 
 std::vector<int> HallScene::ObstaclesInFront(const Eigen::Matrix3f& world_to_camera_rotation,

@@ -68,6 +68,23 @@ Eigen::Isometry3d Route::ContinuousPose(double t) const {
   return pose;
 }
 
+std::vector<double> Route::Revisits(double duration) const {
+  std::vector<double> revisits;
+  bool inside = false;
+  for (double t = 0.0; t <= duration; t += 0.1) {
+    const Eigen::Isometry3d now = BodyPose(t);
+    bool seen = false;
+    for (double earlier = 0.0; earlier + 10.0 <= t && !seen; earlier += 0.1) {
+      const Eigen::Isometry3d before = BodyPose(earlier);
+      const double angle = Eigen::AngleAxisd(before.linear().transpose() * now.linear()).angle();
+      seen = (now.translation() - before.translation()).norm() < 1.0 && angle < M_PI / 6;
+    }
+    if (seen && !inside) revisits.push_back(t);
+    inside = seen;
+  }
+  return revisits;
+}
+
 Eigen::Isometry3d Route::BodyPose(double t) const {
   if (cut_time_ && t >= *cut_time_) return ContinuousPose(t - jump_);
   return ContinuousPose(t);

@@ -26,25 +26,6 @@ Route MakeRoute(const SyntheticSequenceOptions& options) {
   return route;
 }
 
-void WriteSensorYaml(const camera::CameraCalibration& camera, const std::string& name,
-                     const std::string& path) {
-  std::ofstream out(path);
-  out << std::setprecision(15);
-  out << "# General sensor definitions.\nsensor_type: camera\ncomment: synthetic " << name
-      << "\n\n";
-  out << "# Sensor extrinsics wrt. the body-frame.\nT_BS:\n  cols: 4\n  rows: 4\n  data: [";
-  const Eigen::Matrix4d T = camera.T_body_camera.matrix();
-  for (int i = 0; i < 16; ++i) out << T(i / 4, i % 4) << (i < 15 ? ", " : "]\n\n");
-  out << "# Camera specific definitions.\nrate_hz: " << camera.rate_hz << "\nresolution: ["
-      << camera.resolution.width << ", " << camera.resolution.height << "]\ncamera_model: pinhole\n"
-      << "intrinsics: [" << camera.fx << ", " << camera.fy << ", " << camera.cx << ", " << camera.cy
-      << "] #fu, fv, cu, cv\ndistortion_model: radial-tangential\ndistortion_coefficients: [";
-  for (std::size_t i = 0; i < camera.distortion.size(); ++i) {
-    out << camera.distortion[i] << (i + 1 < camera.distortion.size() ? ", " : "]\n");
-  }
-  if (!out) throw std::runtime_error("cannot write " + path);
-}
-
 // Pixels from the rendered radiance: exposure gain, noise, rounding to 8 bits.
 cv::Mat Develop(const cv::Mat& radiance, double gain, double sigma, std::uint64_t noise_seed) {
   cv::Mat noisy = radiance * gain;
@@ -115,7 +96,8 @@ void SyntheticSequence::Write(const std::string& directory,
   for (int c = 0; c < 2; ++c) {
     const std::string name = c == 0 ? "cam0" : "cam1";
     std::filesystem::create_directories(mav0 + "/" + name + "/data");
-    WriteSensorYaml(*cameras[c], name, mav0 + "/" + name + "/sensor.yaml");
+    camera::WriteEurocSensorYaml(*cameras[c], "synthetic " + name,
+                                 mav0 + "/" + name + "/sensor.yaml");
     lists[c].open(mav0 + "/" + name + "/data.csv");
     lists[c] << "#timestamp [ns],filename\n";
   }
@@ -166,6 +148,9 @@ void SyntheticSequence::Write(const std::string& directory,
   }
   evaluation::WriteEurocTrajectory(truth, mav0 + "/state_groundtruth_estimate0/data.csv");
 
+  // The same rig in the nodelets' calibration format (launch files: calibration:=...).
+  camera::WriteStereoCalibrationYaml(rig, directory + "/stereo_calibration.yaml");
+
   std::ofstream about(mav0 + "/synthetic.yaml");
   about << std::setprecision(10) << "route: " << options_.route << "\nseconds: " << options_.seconds
         << "\nseed: " << options_.seed << "\nframes: " << frames
@@ -175,6 +160,10 @@ void SyntheticSequence::Write(const std::string& directory,
         << "\nmotion_blur: " << (options_.motion_blur ? "true" : "false") << "\n";
   if (route_.cut_time())
     about << "cut_time: " << *route_.cut_time() << "\njump: " << route_.jump() << "\n";
+  about << "revisits: [";  // seconds after the first image when the route returns to a known place
+  const std::vector<double> revisits = route_.Revisits((frames - 1) * kFrameNs * 1e-9);
+  for (std::size_t r = 0; r < revisits.size(); ++r) about << (r ? ", " : "") << revisits[r];
+  about << "]\n";
   about << "photos:\n";
   for (const Texture& texture : scene_.textures()) about << "  - " << texture.name << "\n";
 }

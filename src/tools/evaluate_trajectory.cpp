@@ -20,7 +20,7 @@ constexpr char kUsage[] =
     "usage: evaluate_trajectory --gt FILE --est FILE [--align se3|sim3|none] [--max-dt S]\n"
     "                           [--gt-to-camera sensor.yaml] [--rpe-delta D] [--rpe-unit "
     "frames|m]\n"
-    "                           [--json] [--plot out.png]\n"
+    "                           [--json] [--plot out.png] [--keyframes FILE]\n"
     "Trajectory files: TUM (t x y z qx qy qz qw), EuRoC CSV (.csv, stamps in ns) or KITTI (3x4).\n"
     "ATE: positions of the estimate aligned to the ground truth (Umeyama, --align, default se3),\n"
     "then RMSE/mean/median/max of the position differences, as evo_ape -a.\n"
@@ -62,13 +62,18 @@ void PrintJson(const evaluation::EvaluationResult& r, const evaluation::Evaluati
       o.rpe_delta.unit == evaluation::RpeDelta::Unit::kFrames ? "frames" : "m");
 }
 
-void WritePlot(const evaluation::EvaluationResult& r, const std::string& path) {
-  std::vector<Eigen::Vector3d> reference, estimate;
+// `keyframes` (may be empty) are drawn with the estimate's alignment.
+void WritePlot(const evaluation::EvaluationResult& r, const evaluation::Trajectory& keyframes,
+               const std::string& path) {
+  std::vector<Eigen::Vector3d> reference, estimate, keyframe_positions;
   for (const auto& p : r.matched_reference) reference.push_back(p.pose.translation());
   for (const auto& p : r.aligned_estimate) estimate.push_back(p.pose.translation());
+  for (const auto& p : keyframes) keyframe_positions.push_back(r.alignment * p.pose.translation());
   evaluation::TopViewPlot plot;
   plot.AddPath(reference, cv::Scalar(80, 80, 80), "ground truth", 3);
   plot.AddPath(estimate, cv::Scalar(200, 90, 0), "estimate (aligned)", 2);
+  if (!keyframe_positions.empty())
+    plot.AddPoints(keyframe_positions, cv::Scalar(30, 30, 220), "keyframes", 4);
   char title[128];
   std::snprintf(title, sizeof(title), "ATE RMSE %.2f cm over %zu poses", r.ate.rmse * 100.0,
                 r.matched);
@@ -86,7 +91,7 @@ int main(int argc, char** argv) {
   try {
     args.emplace(argc, argv,
                  std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "plot",
-                                       "rpe-delta", "rpe-unit"},
+                                       "rpe-delta", "rpe-unit", "keyframes"},
                  std::set<std::string>{"json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -126,7 +131,13 @@ int main(int argc, char** argv) {
     } else {
       PrintTable(result, options, gt_path, est_path);
     }
-    if (const auto plot_path = args->Value("plot")) WritePlot(result, *plot_path);
+    if (const auto plot_path = args->Value("plot")) {
+      const auto keyframes_path = args->Value("keyframes");
+      WritePlot(
+          result,
+          keyframes_path ? evaluation::ReadTrajectory(*keyframes_path) : evaluation::Trajectory{},
+          *plot_path);
+    }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "evaluate_trajectory: %s\n", error.what());
     return 1;

@@ -45,4 +45,9 @@ CameraCalibration ReadEurocSensorYaml(const std::string& path);
 // (config/euroc_stereo.yaml).
 StereoCalibration ReadStereoCalibrationYaml(const std::string& path);
 
+// Writers of the same two formats (15 significant digits); throw std::runtime_error on failure.
+void WriteEurocSensorYaml(const CameraCalibration& camera, const std::string& comment,
+                          const std::string& path);
+void WriteStereoCalibrationYaml(const StereoCalibration& calibration, const std::string& path);
+
 }  // namespace stereo_fabmap_slam::camera

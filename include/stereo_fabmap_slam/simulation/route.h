@@ -2,6 +2,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -31,6 +32,11 @@ class Route {
   std::optional<double> cut_time() const { return cut_time_; }
   double jump() const { return jump_; }
   double lap_time() const { return lap_time_; }
+  // Times in [0, duration] when the camera comes back to a place it saw at least 10 s before:
+  // within 1 m of an earlier position, heading within 30 degrees. Consecutive such moments count
+  // as one revisit (the time of its first moment). These are the loops a place recognizer should
+  // find.
+  std::vector<double> Revisits(double duration) const;
   void set_duration(double seconds);
 
  private:

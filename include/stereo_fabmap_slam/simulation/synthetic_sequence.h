@@ -26,7 +26,8 @@ struct SyntheticSequenceOptions {
 
 // Renders a stereo sequence of the synthetic hall into EuRoC's ASL layout: mav0/cam0 and cam1
 // (data.csv, data/<stamp>.png, sensor.yaml), mav0/state_groundtruth_estimate0/data.csv (200 Hz
-// body poses) and mav0/synthetic.yaml (how it was made). The same options give the same bytes.
+// body poses), mav0/synthetic.yaml (how it was made) and stereo_calibration.yaml (the rig for
+// the nodelets, as config/euroc_stereo.yaml). The same options give the same bytes.
 class SyntheticSequence {
  public:
   explicit SyntheticSequence(const SyntheticSequenceOptions& options);
