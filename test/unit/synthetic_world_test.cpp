@@ -201,6 +201,34 @@ TEST(SyntheticWorld, SameSeedSameBytesAndReadableOutput) {
   EXPECT_NEAR(written.right.cy, rig.right.cy, 1e-12);
 }
 
+TEST(SyntheticWorld, ExposureAndMotionBlurChangeTheImages) {
+  TemporaryDirectory temp;
+  SyntheticSequenceOptions options;
+  options.seconds = 1.6;  // the exposure gain swings over 6 s: by 1.5 s it is ~20 % up
+  options.noise_sigma = 0.0;
+  SyntheticSequence(options).Write(temp.path() + "/plain");
+  options.exposure_changes = true;
+  SyntheticSequence(options).Write(temp.path() + "/exposure");
+  options.exposure_changes = false;
+  options.motion_blur = true;
+  SyntheticSequence(options).Write(temp.path() + "/blur");
+  const io::EurocSequence plain = io::EurocSequence::Open(temp.path() + "/plain");
+  const io::EurocSequence exposure = io::EurocSequence::Open(temp.path() + "/exposure");
+  const io::EurocSequence blur = io::EurocSequence::Open(temp.path() + "/blur");
+  const std::size_t last = plain.size() - 1;
+  const cv::Mat a = plain.LoadStereoPair(last).left, b = exposure.LoadStereoPair(last).left;
+  EXPECT_GT(cv::mean(b)[0], 1.1 * cv::mean(a)[0]);  // brighter by the gain
+  // Blur keeps the brightness but removes fine detail: less gradient energy.
+  const auto sharpness = [](const cv::Mat& image) {
+    cv::Mat laplacian;
+    cv::Laplacian(image, laplacian, CV_32F);
+    return cv::mean(cv::abs(laplacian))[0];
+  };
+  const cv::Mat c = blur.LoadStereoPair(last).left;
+  EXPECT_NEAR(cv::mean(c)[0], cv::mean(a)[0], 0.02 * cv::mean(a)[0]);
+  EXPECT_LT(sharpness(c), sharpness(a));
+}
+
 TEST(SyntheticWorld, KidnapRouteJumpsBackToAPlaceSeenBefore) {
   Route route(RouteKind::kKidnap, HallOptions{});
   route.set_duration(40.0);
