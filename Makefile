@@ -38,7 +38,7 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_DEVEL_PREFIX=$(WS)/devel -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
 CMAKE_BUILD := cmake --build $(WS)/build --
 
-.PHONY: deps build test demo bench clean format
+.PHONY: deps build test demo bench clean format vocabulary
 
 deps:
 	@missing=$$(for p in $(DEBIAN_PACKAGES); do \
@@ -56,6 +56,23 @@ $(WS)/build/Makefile:
 # Later builds re-run CMake by themselves when a CMakeLists.txt or package.xml changes.
 build: deps $(WS)/build/Makefile
 	$(CMAKE_BUILD) -j$(JOBS)
+	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/vocabulary.bin
+
+# The default FAB-MAP vocabulary (config/fabmap.yaml points at it), trained once from images
+# every fresh machine has: opencv-doc's photos and a rendered sequence of the synthetic hall.
+# Never from ../shared/data. `make vocabulary` trains it again.
+FABMAP_DEFAULT := build/fabmap/default
+$(FABMAP_DEFAULT)/vocabulary.bin:
+	@echo "Training the default FAB-MAP vocabulary (first build only, about a minute)"
+	rm -rf build/fabmap/synthetic
+	$(BIN)/make_synthetic_sequence --out build/fabmap/synthetic --route figure8 --seconds 20 --seed 7 --no-bag > /dev/null
+	$(BIN)/train_fabmap --output $(FABMAP_DEFAULT) --spacing 5 /usr/share/doc/opencv-doc/examples/data build/fabmap/synthetic
+	rm -rf build/fabmap/synthetic
+
+vocabulary: deps $(WS)/build/Makefile
+	$(CMAKE_BUILD) -j$(JOBS)
+	rm -rf $(FABMAP_DEFAULT)
+	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/vocabulary.bin
 
 # Builds the test programs in parallel, then runs them one at a time (each rostest starts its
 # own master) and closes with one line "tests: N passed, N failed, N skipped".

@@ -1,0 +1,112 @@
+#pragma once
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
+#include "stereo_fabmap_slam/place_recognition/place_database.h"
+
+namespace stereo_fabmap_slam::place_recognition {
+
+struct FabMapOptions {
+  double p_z_given_e = 0.39;     // detector model: p(word seen | scene element present)
+  double p_z_given_not_e = 0.0;  // p(word seen | element absent): false detections
+  double new_place_prior = 0.9;  // prior that a view shows a place not in the map
+  double smoothing = 0.99;       // posterior smoothing: p -> s p + (1 - s) / (places + 1)
+  std::string new_place_model = "mean_field";  // mean_field, or sampling (training places)
+  std::string location_prior =
+      "uniform";                 // uniform, or motion (favours the last match's neighbours)
+  double motion_weight = 0.6;    // motion prior: share of the existing-place mass on neighbours
+  bool inverted_index = true;    // FAB-MAP 2.0 (inverted index); false: FAB-MAP 1.0 (every word)
+  double match_threshold = 0.5;  // Add(): update the best place at this posterior, else add one
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;  // throws std::invalid_argument
+};
+
+// Per-word probabilities of the FAB-MAP observation model (Cummins & Newman, IJRR 2008): the
+// detector model, the place appearance p(e | place) after a place's observations, and the
+// observation likelihood of each word given its Chow-Liu parent.
+class FabMapModel {
+ public:
+  FabMapModel(ChowLiuTree tree, double p_z_given_e, double p_z_given_not_e);
+
+  // p(e_q = 1 | a place observed `observations` times, `hits` of them showing word q).
+  double Theta(int q, int hits, int observations) const;
+  double PriorTheta(int q) const { return tree_.Marginal(q); }
+  // log p(z_q = z | z_parent = zp, place with p(e_q = 1) = theta) = log sum_e p(z | e, zp) p(e).
+  double Term(int q, bool z, bool zp, double theta) const;
+  // sum over all words of Term(q, 0, 0, .) for a place with no hits seen `observations` times,
+  // or for the average place (prior): cached.
+  double EmptySum(int observations) const;
+  double PriorEmptySum() const { return prior_empty_sum_; }
+  const ChowLiuTree& tree() const { return tree_; }
+  int size() const { return tree_.size(); }
+
+ private:
+  ChowLiuTree tree_;
+  double p_z_given_e_, p_z_given_not_e_;
+  std::vector<std::array<double, 8>> z_given_e_zp_;  // [z * 4 + zp * 2 + e] = p(z | e, zp)
+  double prior_empty_sum_ = 0;
+  mutable std::map<int, double> empty_sums_;
+};
+
+struct FabMapResult {
+  std::vector<double> posterior;        // per place in the map
+  double new_place = 1.0;               // probability that the view shows a new place
+  int best = -1;                        // place with the highest posterior, -1 if the map is empty
+  std::vector<double> log_likelihoods;  // log p(Z | place)
+  double new_place_log_likelihood = 0;  // log p(Z | new place)
+};
+
+// FAB-MAP: the posterior over the places in the map and a new place, given the words of a view.
+// FAB-MAP 2.0 (the default) computes the same log-likelihoods as FAB-MAP 1.0 by rearranging the
+// sum over words: a per-place constant plus corrections for the words the query shows (and their
+// Chow-Liu children), found through the inverted index, so that a query costs time in
+// proportion to the places sharing its words, not to places x vocabulary.
+class FabMap {
+ public:
+  // `training_places`: the training images as places, for the sampling new-place model.
+  FabMap(ChowLiuTree tree, const FabMapOptions& options,
+         PlaceDatabase training_places = PlaceDatabase());
+
+  FabMapResult Compare(const std::vector<int>& words) const;
+  // Compare, then update the best place if its posterior reaches match_threshold, or add a new
+  // place; `place` receives which.
+  FabMapResult Add(const std::vector<int>& words, int* place = nullptr);
+
+  const PlaceDatabase& places() const { return places_.database; }
+  // Replaces the map's places (e.g. loaded from a file).
+  void SetPlaces(PlaceDatabase places);
+  const FabMapModel& model() const { return model_; }
+
+ private:
+  struct IndexedPlaces {
+    PlaceDatabase database;
+    std::vector<double>
+        hit_sums;  // per place: sum over its words of Term(hits) - Term(no hits), absent word
+  };
+  struct Query {
+    std::vector<char> present;  // per word
+    std::vector<int>
+        affected;  // query words and their children: where the terms differ from "absent"
+  };
+
+  Query Prepare(const std::vector<int>& words) const;
+  double HitSum(const Place& place) const;
+  void Reindex(IndexedPlaces* places) const;
+  std::vector<double> LogLikelihoods(const IndexedPlaces& places, const Query& query) const;
+  std::vector<double> LogLikelihoodsFull(const IndexedPlaces& places, const Query& query) const;
+  std::vector<double> LogLikelihoodsIndexed(const IndexedPlaces& places, const Query& query) const;
+  double NewPlaceLogLikelihood(const Query& query) const;
+
+  FabMapOptions options_;
+  FabMapModel model_;
+  IndexedPlaces places_, samples_;
+  int last_match_ = -1;
+};
+
+}  // namespace stereo_fabmap_slam::place_recognition

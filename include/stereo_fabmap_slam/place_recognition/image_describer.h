@@ -1,0 +1,25 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "stereo_fabmap_slam/features/adaptive_detector.h"
+#include "stereo_fabmap_slam/features/feature_factory.h"
+#include "stereo_fabmap_slam/features/feature_options.h"
+
+namespace stereo_fabmap_slam::place_recognition {
+
+// Key points and descriptors of one image with the odometry's detector, ANMS and descriptor, so
+// that place recognition sees the features the keyframes carry.
+class ImageDescriber {
+ public:
+  explicit ImageDescriber(const features::FeatureOptions& options);
+  // Descriptors of a mono8 image, one per row (CV_8U binary or CV_32F).
+  cv::Mat Describe(const cv::Mat& image);
+
+ private:
+  features::FeatureOptions options_;
+  features::AdaptiveDetector detector_;
+  features::DescriptorKind descriptor_;
+};
+
+}  // namespace stereo_fabmap_slam::place_recognition

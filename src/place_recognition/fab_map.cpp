@@ -1,0 +1,314 @@
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace stereo_fabmap_slam::place_recognition {
+namespace {
+
+double LogSumExp(const std::vector<double>& values) {
+  const double top = *std::max_element(values.begin(), values.end());
+  double sum = 0;
+  for (const double v : values) sum += std::exp(v - top);
+  return top + std::log(sum);
+}
+
+}  // namespace
+
+void FabMapOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("p_z_given_e", &p_z_given_e);
+  visitor.Visit("p_z_given_not_e", &p_z_given_not_e);
+  visitor.Visit("new_place_prior", &new_place_prior);
+  visitor.Visit("smoothing", &smoothing);
+  visitor.Visit("new_place_model", &new_place_model);
+  visitor.Visit("location_prior", &location_prior);
+  visitor.Visit("motion_weight", &motion_weight);
+  visitor.Visit("inverted_index", &inverted_index);
+  visitor.Visit("match_threshold", &match_threshold);
+}
+
+void FabMapOptions::Validate() const {
+  if (!(p_z_given_e > 0 && p_z_given_e < 1) ||
+      !(p_z_given_not_e >= 0 && p_z_given_not_e < p_z_given_e)) {
+    throw std::invalid_argument("fabmap: need 0 <= p_z_given_not_e < p_z_given_e < 1");
+  }
+  if (!(new_place_prior > 0 && new_place_prior < 1))
+    throw std::invalid_argument("fabmap.new_place_prior must lie in (0, 1)");
+  if (!(smoothing > 0 && smoothing <= 1))
+    throw std::invalid_argument("fabmap.smoothing must lie in (0, 1]");
+  if (new_place_model != "mean_field" && new_place_model != "sampling") {
+    throw std::invalid_argument("fabmap.new_place_model must be mean_field or sampling");
+  }
+  if (location_prior != "uniform" && location_prior != "motion") {
+    throw std::invalid_argument("fabmap.location_prior must be uniform or motion");
+  }
+  if (!(motion_weight >= 0 && motion_weight <= 1))
+    throw std::invalid_argument("fabmap.motion_weight must lie in [0, 1]");
+  if (!(match_threshold > 0 && match_threshold <= 1))
+    throw std::invalid_argument("fabmap.match_threshold must lie in (0, 1]");
+}
+
+FabMapModel::FabMapModel(ChowLiuTree tree, double p_z_given_e, double p_z_given_not_e)
+    : tree_(std::move(tree)), p_z_given_e_(p_z_given_e), p_z_given_not_e_(p_z_given_not_e) {
+  const int v = tree_.size();
+  z_given_e_zp_.resize(static_cast<std::size_t>(v));
+  for (int q = 0; q < v; ++q) {
+    for (int z = 0; z < 2; ++z) {
+      for (int zp = 0; zp < 2; ++zp) {
+        for (int e = 0; e < 2; ++e) {
+          // p(z_q | e_q, z_p) combining the detector model and the tree (Cummins & Newman 2008,
+          // as in OpenCV's former FabMap): alpha / (alpha + beta) with
+          // alpha = p(z) p(z | e) p(z | z_p) and beta the same for not z.
+          const auto detector = [&](bool seen) {
+            const double p_seen = e ? p_z_given_e_ : p_z_given_not_e_;
+            return seen ? p_seen : 1.0 - p_seen;
+          };
+          const double marginal = tree_.Marginal(q);
+          const double alpha =
+              (z ? marginal : 1 - marginal) * detector(z) * tree_.Conditional(q, z, zp);
+          const double beta =
+              (z ? 1 - marginal : marginal) * detector(!z) * tree_.Conditional(q, !z, zp);
+          z_given_e_zp_[static_cast<std::size_t>(q)][z * 4 + zp * 2 + e] = alpha / (alpha + beta);
+        }
+      }
+    }
+    prior_empty_sum_ += Term(q, false, false, PriorTheta(q));
+  }
+}
+
+double FabMapModel::Theta(int q, int hits, int observations) const {
+  const double prior = PriorTheta(q);
+  const double present =
+      prior * std::pow(p_z_given_e_, hits) * std::pow(1 - p_z_given_e_, observations - hits);
+  const double absent = (1 - prior) * std::pow(p_z_given_not_e_, hits) *
+                        std::pow(1 - p_z_given_not_e_, observations - hits);
+  return present / (present + absent);
+}
+
+double FabMapModel::Term(int q, bool z, bool zp, double theta) const {
+  const std::array<double, 8>& p = z_given_e_zp_[static_cast<std::size_t>(q)];
+  const int base = (z ? 4 : 0) + (zp ? 2 : 0);
+  return std::log(p[base + 1] * theta + p[base] * (1 - theta));
+}
+
+double FabMapModel::EmptySum(int observations) const {
+  const auto cached = empty_sums_.find(observations);
+  if (cached != empty_sums_.end()) return cached->second;
+  double sum = 0;
+  for (int q = 0; q < size(); ++q) sum += Term(q, false, false, Theta(q, 0, observations));
+  empty_sums_[observations] = sum;
+  return sum;
+}
+
+FabMap::FabMap(ChowLiuTree tree, const FabMapOptions& options, PlaceDatabase training_places)
+    : options_((options.Validate(), options)),
+      model_(std::move(tree), options.p_z_given_e, options.p_z_given_not_e) {
+  places_.database = PlaceDatabase(model_.size());
+  samples_.database = std::move(training_places);
+  if (samples_.database.vocabulary_size() != 0 &&
+      samples_.database.vocabulary_size() != model_.size()) {
+    throw std::invalid_argument("training places and Chow-Liu tree have different vocabularies");
+  }
+  if (options_.new_place_model == "sampling" && samples_.database.size() == 0) {
+    throw std::invalid_argument("the sampling new-place model needs training places");
+  }
+  Reindex(&samples_);
+}
+
+void FabMap::SetPlaces(PlaceDatabase places) {
+  if (places.vocabulary_size() != model_.size()) {
+    throw std::invalid_argument("places and Chow-Liu tree have different vocabularies");
+  }
+  places_.database = std::move(places);
+  Reindex(&places_);
+  last_match_ = -1;
+}
+
+double FabMap::HitSum(const Place& place) const {
+  double sum = 0;
+  for (std::size_t i = 0; i < place.words.size(); ++i) {
+    const int q = place.words[i];
+    sum += model_.Term(q, false, false, model_.Theta(q, place.hits[i], place.observations)) -
+           model_.Term(q, false, false, model_.Theta(q, 0, place.observations));
+  }
+  return sum;
+}
+
+void FabMap::Reindex(IndexedPlaces* places) const {
+  places->hit_sums.resize(static_cast<std::size_t>(places->database.size()));
+  for (int i = 0; i < places->database.size(); ++i)
+    places->hit_sums[i] = HitSum(places->database.place(i));
+}
+
+FabMap::Query FabMap::Prepare(const std::vector<int>& words) const {
+  Query query;
+  query.present.assign(static_cast<std::size_t>(model_.size()), 0);
+  for (const int w : words) {
+    if (w < 0 || w >= model_.size()) throw std::invalid_argument("word outside the vocabulary");
+    query.present[static_cast<std::size_t>(w)] = 1;
+  }
+  for (const int w : words) {
+    query.affected.push_back(w);
+    for (const int child : model_.tree().children(w)) {
+      if (!query.present[static_cast<std::size_t>(child)]) query.affected.push_back(child);
+    }
+  }
+  std::sort(query.affected.begin(), query.affected.end());
+  query.affected.erase(std::unique(query.affected.begin(), query.affected.end()),
+                       query.affected.end());
+  return query;
+}
+
+std::vector<double> FabMap::LogLikelihoodsFull(const IndexedPlaces& places,
+                                               const Query& query) const {
+  // FAB-MAP 1.0: every word of the vocabulary for every place.
+  const ChowLiuTree& tree = model_.tree();
+  std::vector<double> result;
+  for (int i = 0; i < places.database.size(); ++i) {
+    const Place& place = places.database.place(i);
+    double sum = 0;
+    std::size_t next = 0;
+    for (int q = 0; q < model_.size(); ++q) {
+      int hits = 0;
+      if (next < place.words.size() && place.words[next] == q) hits = place.hits[next++];
+      const bool z = query.present[static_cast<std::size_t>(q)];
+      const bool zp =
+          tree.parent(q) >= 0 && query.present[static_cast<std::size_t>(tree.parent(q))];
+      sum += model_.Term(q, z, zp, model_.Theta(q, hits, place.observations));
+    }
+    result.push_back(sum);
+  }
+  return result;
+}
+
+std::vector<double> FabMap::LogLikelihoodsIndexed(const IndexedPlaces& places,
+                                                  const Query& query) const {
+  // FAB-MAP 2.0: log p(Z | L) = [sum_q Term(q, 0, 0, theta_0)] + [corrections for the affected
+  // words, same for every place observed as often] + hit_sums[L] + [corrections for affected
+  // words the place has shown, found through the inverted index].
+  const ChowLiuTree& tree = model_.tree();
+  const PlaceDatabase& database = places.database;
+  std::vector<double> scores(static_cast<std::size_t>(database.size()), 0.0);
+  std::map<int, double> common;  // by number of observations
+  for (const int u : query.affected) {
+    const bool z = query.present[static_cast<std::size_t>(u)];
+    const bool zp = tree.parent(u) >= 0 && query.present[static_cast<std::size_t>(tree.parent(u))];
+    // The change for a place seen once that showed the word once: the same for all such places.
+    const double theta_hit = model_.Theta(u, 1, 1), theta_none = model_.Theta(u, 0, 1);
+    const double once =
+        (model_.Term(u, z, zp, theta_hit) - model_.Term(u, z, zp, theta_none)) -
+        (model_.Term(u, false, false, theta_hit) - model_.Term(u, false, false, theta_none));
+    const std::vector<std::uint32_t>& list = database.PlacesWith(u);
+    const std::vector<std::uint16_t>& hits = database.HitsOf(u);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::uint32_t place = list[i];
+      const int n = database.place(static_cast<int>(place)).observations;
+      if (n == 1) {
+        scores[place] += once;
+        continue;
+      }
+      const double with = model_.Theta(u, hits[i], n), without = model_.Theta(u, 0, n);
+      scores[place] += (model_.Term(u, z, zp, with) - model_.Term(u, z, zp, without)) -
+                       (model_.Term(u, false, false, with) - model_.Term(u, false, false, without));
+    }
+  }
+  std::vector<double> result(scores.size());
+  for (std::size_t i = 0; i < scores.size(); ++i) {
+    const int n = database.place(static_cast<int>(i)).observations;
+    auto it = common.find(n);
+    if (it == common.end()) {
+      double sum = model_.EmptySum(n);
+      for (const int u : query.affected) {
+        const bool z = query.present[static_cast<std::size_t>(u)];
+        const bool zp =
+            tree.parent(u) >= 0 && query.present[static_cast<std::size_t>(tree.parent(u))];
+        const double theta = model_.Theta(u, 0, n);
+        sum += model_.Term(u, z, zp, theta) - model_.Term(u, false, false, theta);
+      }
+      it = common.emplace(n, sum).first;
+    }
+    result[i] = it->second + places.hit_sums[i] + scores[i];
+  }
+  return result;
+}
+
+std::vector<double> FabMap::LogLikelihoods(const IndexedPlaces& places, const Query& query) const {
+  return options_.inverted_index ? LogLikelihoodsIndexed(places, query)
+                                 : LogLikelihoodsFull(places, query);
+}
+
+double FabMap::NewPlaceLogLikelihood(const Query& query) const {
+  if (options_.new_place_model == "sampling") {
+    // The average likelihood of the training images taken as places.
+    std::vector<double> samples = LogLikelihoods(samples_, query);
+    return LogSumExp(samples) - std::log(static_cast<double>(samples.size()));
+  }
+  // Mean field: a place whose every word has its prior probability.
+  const ChowLiuTree& tree = model_.tree();
+  double sum = model_.PriorEmptySum();
+  for (const int u : query.affected) {
+    const bool z = query.present[static_cast<std::size_t>(u)];
+    const bool zp = tree.parent(u) >= 0 && query.present[static_cast<std::size_t>(tree.parent(u))];
+    sum += model_.Term(u, z, zp, model_.PriorTheta(u)) -
+           model_.Term(u, false, false, model_.PriorTheta(u));
+  }
+  return sum;
+}
+
+FabMapResult FabMap::Compare(const std::vector<int>& words) const {
+  const Query query = Prepare(words);
+  FabMapResult result;
+  result.log_likelihoods = LogLikelihoods(places_, query);
+  result.new_place_log_likelihood = NewPlaceLogLikelihood(query);
+  const int n = static_cast<int>(result.log_likelihoods.size());
+  if (n == 0) return result;
+
+  // Location prior: the new place gets new_place_prior; the rest is spread over the places,
+  // uniformly or, with the motion model, partly on the last match and its neighbours.
+  std::vector<double> prior(static_cast<std::size_t>(n), (1 - options_.new_place_prior) / n);
+  if (options_.location_prior == "motion" && last_match_ >= 0) {
+    std::vector<int> neighbours;
+    for (int i = std::max(0, last_match_ - 1); i <= std::min(n - 1, last_match_ + 1); ++i)
+      neighbours.push_back(i);
+    for (double& p : prior) p *= 1 - options_.motion_weight;
+    for (const int i : neighbours) {
+      prior[static_cast<std::size_t>(i)] += (1 - options_.new_place_prior) *
+                                            options_.motion_weight /
+                                            static_cast<double>(neighbours.size());
+    }
+  }
+  std::vector<double> log_joint;
+  for (int i = 0; i < n; ++i) log_joint.push_back(result.log_likelihoods[i] + std::log(prior[i]));
+  log_joint.push_back(result.new_place_log_likelihood + std::log(options_.new_place_prior));
+  const double normaliser = LogSumExp(log_joint);
+  const double uniform = (1 - options_.smoothing) / (n + 1);
+  for (int i = 0; i < n; ++i) {
+    result.posterior.push_back(options_.smoothing * std::exp(log_joint[i] - normaliser) + uniform);
+  }
+  result.new_place = options_.smoothing * std::exp(log_joint.back() - normaliser) + uniform;
+  result.best =
+      static_cast<int>(std::max_element(result.posterior.begin(), result.posterior.end()) -
+                       result.posterior.begin());
+  return result;
+}
+
+FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
+  FabMapResult result = Compare(words);
+  int index;
+  if (result.best >= 0 &&
+      result.posterior[static_cast<std::size_t>(result.best)] >= options_.match_threshold) {
+    index = result.best;
+    places_.database.UpdatePlace(index, words);
+    places_.hit_sums[static_cast<std::size_t>(index)] = HitSum(places_.database.place(index));
+  } else {
+    index = places_.database.AddPlace(words);
+    places_.hit_sums.push_back(HitSum(places_.database.place(index)));
+  }
+  last_match_ = index;
+  if (place != nullptr) *place = index;
+  return result;
+}
+
+}  // namespace stereo_fabmap_slam::place_recognition

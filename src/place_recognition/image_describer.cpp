@@ -1,0 +1,23 @@
+#include "stereo_fabmap_slam/place_recognition/image_describer.h"
+
+#include "stereo_fabmap_slam/features/anms.h"
+
+namespace stereo_fabmap_slam::place_recognition {
+
+ImageDescriber::ImageDescriber(const features::FeatureOptions& options)
+    : options_((options.Validate(), options)),
+      detector_(options, /*stereo_candidates=*/false),
+      descriptor_(features::CreateDescriptor(options)) {}
+
+cv::Mat ImageDescriber::Describe(const cv::Mat& image) {
+  std::vector<cv::KeyPoint> keypoints = detector_.Detect(image);
+  keypoints = options_.anms
+                  ? features::SelectWithAnms(std::move(keypoints), options_.max_features,
+                                             image.size(), options_.anms_tolerance)
+                  : features::SelectStrongest(std::move(keypoints), options_.max_features);
+  cv::Mat descriptors;
+  descriptor_.extractor->compute(image, keypoints, descriptors);
+  return descriptors;
+}
+
+}  // namespace stereo_fabmap_slam::place_recognition

@@ -1,0 +1,118 @@
+// Adds the images of a folder or EuRoC sequence to a FAB-MAP map in order and prints, for each,
+// the best earlier place, its posterior and the new-place probability, as CSV.
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "command_line.h"
+#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/image_describer.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/place_recognition/vocabulary.h"
+
+namespace {
+
+using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
+namespace fs = std::filesystem;
+
+constexpr char kUsage[] =
+    "usage: fabmap_match [--vocabulary FILE] ASL_OR_IMAGE_DIR [--every N] [--config FILE]\n"
+    "                    [--fabmap-config FILE] [--sampling]\n"
+    "FILE: a vocabulary.bin from train_fabmap, with chow_liu_tree.bin and training_places.bin\n"
+    "beside it (default: the vocabulary_directory of config/fabmap.yaml). Prints\n"
+    "CSV: image,timestamp,place,best_place,best_posterior,new_place_probability\n"
+    "(place: the place the image was added to or updated; best_place -1 while the map is empty).\n";
+
+struct Image {
+  std::string path;
+  double timestamp;
+};
+
+std::vector<Image> ImagesOf(const std::string& source, int every) {
+  std::vector<Image> images;
+  if (fs::is_directory(source + "/mav0") || fs::is_directory(source + "/cam0")) {
+    const io::EurocSequence sequence = io::EurocSequence::Open(source);
+    for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(every)) {
+      images.push_back({sequence.frames()[i].left_path, sequence.frames()[i].timestamp_ns * 1e-9});
+    }
+    return images;
+  }
+  std::vector<std::string> paths;
+  for (const auto& entry : fs::directory_iterator(source)) {
+    const std::string extension = entry.path().extension().string();
+    if (extension == ".png" || extension == ".jpg" || extension == ".jpeg")
+      paths.push_back(entry.path().string());
+  }
+  std::sort(paths.begin(), paths.end());
+  for (std::size_t i = 0; i < paths.size(); i += static_cast<std::size_t>(every)) {
+    images.push_back({paths[i], static_cast<double>(i)});
+  }
+  return images;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::optional<tools::CommandLine> args;
+  int every = 1;
+  try {
+    args.emplace(argc, argv,
+                 std::set<std::string>{"vocabulary", "every", "config", "fabmap-config"},
+                 std::set<std::string>{"sampling", "help"});
+    if (args->Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (args->positional().size() != 1)
+      throw std::invalid_argument("one ASL_OR_IMAGE_DIR is required");
+    every = static_cast<int>(args->NumberOr("every", 1));
+    if (every < 1) throw std::invalid_argument("--every must be >= 1");
+  } catch (const std::invalid_argument& error) {
+    std::fprintf(stderr, "fabmap_match: %s\n%s", error.what(), kUsage);
+    return 2;
+  }
+  try {
+    place_recognition::PlaceRecognitionOptions options =
+        place_recognition::LoadPlaceRecognitionOptions(
+            args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
+            pipeline::LoadPipelineOptions(
+                args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml"))
+                .features);
+    const std::string vocabulary_file =
+        args->ValueOr("vocabulary", options.vocabulary_directory + "/vocabulary.bin");
+    const std::string directory = fs::path(vocabulary_file).parent_path().string();
+    if (directory.empty()) throw std::runtime_error("--vocabulary must name a file in a folder");
+    const place_recognition::Vocabulary vocabulary =
+        place_recognition::Vocabulary::Load(vocabulary_file);
+    place_recognition::FabMapOptions fabmap_options = options.fabmap;
+    if (args->Flag("sampling")) fabmap_options.new_place_model = "sampling";
+    place_recognition::FabMap fabmap(
+        place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), fabmap_options,
+        place_recognition::PlaceDatabase::Load(directory + "/training_places.bin"));
+    place_recognition::ImageDescriber describer(options.features);
+    std::printf("image,timestamp,place,best_place,best_posterior,new_place_probability\n");
+    for (const Image& image : ImagesOf(args->positional()[0], every)) {
+      const cv::Mat pixels = cv::imread(image.path, cv::IMREAD_GRAYSCALE);
+      if (pixels.empty()) throw std::runtime_error(image.path + ": cannot read image");
+      int place = -1;
+      const place_recognition::FabMapResult result =
+          fabmap.Add(vocabulary.WordSet(describer.Describe(pixels)), &place);
+      std::printf("%s,%.9f,%d,%d,%.6f,%.6f\n", fs::path(image.path).filename().c_str(),
+                  image.timestamp, place, result.best,
+                  result.best >= 0 ? result.posterior[static_cast<std::size_t>(result.best)] : 0.0,
+                  result.new_place);
+    }
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "fabmap_match: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}

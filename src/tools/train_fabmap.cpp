@@ -1,0 +1,138 @@
+// Learns a FAB-MAP vocabulary and Chow-Liu tree from images: folders of photos and/or EuRoC ASL
+// sequences, with the odometry's detector and descriptor.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "command_line.h"
+#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
+#include "stereo_fabmap_slam/place_recognition/image_describer.h"
+#include "stereo_fabmap_slam/place_recognition/place_database.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/place_recognition/vocabulary.h"
+
+namespace {
+
+using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
+namespace fs = std::filesystem;
+
+constexpr char kUsage[] =
+    "usage: train_fabmap --output DIR [--config FILE] [--fabmap-config FILE] [--spacing N]\n"
+    "                    [--branching B] [--depth D] SOURCE [SOURCE ...]\n"
+    "SOURCE: a folder of images (*.png, *.jpg; every image is a training place) or a EuRoC ASL\n"
+    "sequence (left images, every N-th frame so that training views are distinct places).\n"
+    "Features: the detector and descriptor of --config (default config/euroc.yaml) with the\n"
+    "selection, vocabulary size and spacing of --fabmap-config (default config/fabmap.yaml);\n"
+    "the flags override the latter. Writes DIR/vocabulary.bin (branching^depth words at most),\n"
+    "DIR/chow_liu_tree.bin and DIR/training_places.bin.\n";
+
+std::vector<std::string> ImagesOf(const std::string& source, int spacing) {
+  std::vector<std::string> images;
+  if (fs::is_directory(source + "/mav0") || fs::is_directory(source + "/cam0")) {
+    const io::EurocSequence sequence = io::EurocSequence::Open(source);
+    for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(spacing)) {
+      images.push_back(sequence.frames()[i].left_path);
+    }
+    return images;
+  }
+  if (!fs::is_directory(source)) throw std::runtime_error(source + ": no such folder");
+  for (const auto& entry : fs::directory_iterator(source)) {
+    const std::string extension = entry.path().extension().string();
+    if (extension == ".png" || extension == ".jpg" || extension == ".jpeg")
+      images.push_back(entry.path().string());
+  }
+  std::sort(images.begin(), images.end());
+  return images;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::optional<tools::CommandLine> args;
+  try {
+    args.emplace(
+        argc, argv,
+        std::set<std::string>{"output", "config", "fabmap-config", "spacing", "branching", "depth"},
+        std::set<std::string>{"help"});
+    if (args->Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (!args->Value("output") || args->positional().empty())
+      throw std::invalid_argument("--output and a SOURCE are required");
+  } catch (const std::invalid_argument& error) {
+    std::fprintf(stderr, "train_fabmap: %s\n%s", error.what(), kUsage);
+    return 2;
+  }
+  try {
+    const std::string output = *args->Value("output");
+    const std::string config = args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml");
+    place_recognition::PlaceRecognitionOptions options =
+        place_recognition::LoadPlaceRecognitionOptions(
+            args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
+            pipeline::LoadPipelineOptions(config).features);
+    const int spacing = static_cast<int>(args->NumberOr("spacing", options.training_spacing));
+    place_recognition::VocabularyOptions& vocabulary_options = options.vocabulary;
+    vocabulary_options.branching =
+        static_cast<int>(args->NumberOr("branching", vocabulary_options.branching));
+    vocabulary_options.depth = static_cast<int>(args->NumberOr("depth", vocabulary_options.depth));
+    if (spacing < 1) throw std::runtime_error("--spacing must be >= 1");
+    vocabulary_options.Validate();
+    std::vector<std::string> images;
+    for (const std::string& source : args->positional()) {
+      const std::vector<std::string> found = ImagesOf(source, spacing);
+      std::printf("%s: %zu training images\n", source.c_str(), found.size());
+      images.insert(images.end(), found.begin(), found.end());
+    }
+    if (images.size() < 2) throw std::runtime_error("need at least two training images");
+
+    // Descriptors of every image, with the odometry's features.
+    place_recognition::ImageDescriber describer(options.features);
+    std::vector<cv::Mat> per_image;
+    cv::Mat all;
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      const cv::Mat image = cv::imread(images[i], cv::IMREAD_GRAYSCALE);
+      if (image.empty()) throw std::runtime_error(images[i] + ": cannot read image");
+      per_image.push_back(describer.Describe(image));
+      all.push_back(per_image.back());
+      if ((i + 1) % 50 == 0 || i + 1 == images.size()) {
+        std::fprintf(stderr, "  described %zu / %zu images (%d descriptors)\n", i + 1,
+                     images.size(), all.rows);
+      }
+    }
+    std::fprintf(
+        stderr, "  clustering %d descriptors into up to %d words...\n", all.rows,
+        static_cast<int>(std::pow(vocabulary_options.branching, vocabulary_options.depth)));
+    const place_recognition::Vocabulary vocabulary =
+        place_recognition::Vocabulary::Train(all, vocabulary_options);
+    std::vector<std::vector<int>> word_sets;
+    place_recognition::PlaceDatabase training_places(vocabulary.size());
+    for (const cv::Mat& descriptors : per_image) {
+      word_sets.push_back(vocabulary.WordSet(descriptors));
+      training_places.AddPlace(word_sets.back());
+    }
+    std::fprintf(stderr, "  learning the Chow-Liu tree over %d words from %zu images...\n",
+                 vocabulary.size(), word_sets.size());
+    const place_recognition::ChowLiuTree tree =
+        place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size());
+    fs::create_directories(output);
+    vocabulary.Save(output + "/vocabulary.bin");
+    tree.Save(output + "/chow_liu_tree.bin");
+    training_places.Save(output + "/training_places.bin");
+    std::printf("wrote %s: %d words, Chow-Liu tree from %zu images\n", output.c_str(),
+                vocabulary.size(), word_sets.size());
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "train_fabmap: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}

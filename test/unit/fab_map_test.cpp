@@ -1,0 +1,362 @@
+// Place recognition: Chow-Liu trees, the FAB-MAP posterior, its two formulations, real images,
+// and the files.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
+
+#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/image_describer.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/place_recognition/vocabulary.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+using namespace place_recognition;  // NOLINT: the module under test
+
+// Samples of a known tree-shaped distribution over 8 binary words: each word copies its
+// parent with probability 0.9 (flips otherwise); the root is on half the time.
+std::vector<std::vector<int>> SampleTree(const std::vector<int>& parents, int samples,
+                                         std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::vector<std::vector<int>> sets;
+  for (int s = 0; s < samples; ++s) {
+    std::vector<int> value(parents.size());
+    for (std::size_t w = 0; w < parents.size(); ++w) {  // parents come before children
+      value[w] = parents[w] < 0 ? unit(random) < 0.5
+                                : (unit(random) < 0.9 ? value[parents[w]] : 1 - value[parents[w]]);
+    }
+    std::vector<int> set;
+    for (std::size_t w = 0; w < value.size(); ++w) {
+      if (value[w]) set.push_back(static_cast<int>(w));
+    }
+    sets.push_back(set);
+  }
+  return sets;
+}
+
+std::set<std::pair<int, int>> Edges(const std::vector<int>& parents) {
+  std::set<std::pair<int, int>> edges;
+  for (std::size_t w = 0; w < parents.size(); ++w) {
+    if (parents[w] >= 0) edges.insert({std::min<int>(w, parents[w]), std::max<int>(w, parents[w])});
+  }
+  return edges;
+}
+
+TEST(ChowLiuTree, RecoversTheTreeSamplesWereDrawnFrom) {
+  const std::vector<int> parents = {-1, 0, 0, 1, 1, 2, 5, 3};
+  const ChowLiuTree tree = ChowLiuTree::Train(SampleTree(parents, 4000, 11), 8);
+  std::vector<int> learnt;
+  for (int w = 0; w < 8; ++w) learnt.push_back(tree.parent(w));
+  EXPECT_EQ(Edges(learnt), Edges(parents));
+  // Conditionals: a child equals its parent 90 % of the time (4,000 samples: +-1.5 % at 3 sigma).
+  for (int w = 0; w < 8; ++w) {
+    if (tree.parent(w) < 0) continue;
+    EXPECT_NEAR(tree.Conditional(w, true, true), 0.9, 0.03) << w;
+    EXPECT_NEAR(tree.Conditional(w, true, false), 0.1, 0.03) << w;
+  }
+}
+
+// A small model: 6 words, 60 training images drawn from a known tree.
+ChowLiuTree ToyTree() { return ChowLiuTree::Train(SampleTree({-1, 0, 0, 1, 2, 2}, 60, 5), 6); }
+
+// log p(Z | place) straight from the paper's formulas, one word at a time.
+double HandLogLikelihood(const ChowLiuTree& tree, const FabMapOptions& o,
+                         const std::vector<int>& query, const std::vector<double>& theta) {
+  double log_likelihood = 0;
+  for (int q = 0; q < tree.size(); ++q) {
+    const bool z = std::count(query.begin(), query.end(), q) > 0;
+    const bool zp =
+        tree.parent(q) >= 0 && std::count(query.begin(), query.end(), tree.parent(q)) > 0;
+    double p = 0;
+    for (const bool e : {false, true}) {
+      const double marginal = tree.Marginal(q);
+      const auto detect = [&](bool seen) {
+        return seen ? (e ? o.p_z_given_e : o.p_z_given_not_e)
+                    : 1 - (e ? o.p_z_given_e : o.p_z_given_not_e);
+      };
+      const double alpha = (z ? marginal : 1 - marginal) * detect(z) * tree.Conditional(q, z, zp);
+      const double beta = (z ? 1 - marginal : marginal) * detect(!z) * tree.Conditional(q, !z, zp);
+      p += alpha / (alpha + beta) * (e ? theta[q] : 1 - theta[q]);
+    }
+    log_likelihood += std::log(p);
+  }
+  return log_likelihood;
+}
+
+// p(e = 1 | place seen once, showing `words`), by Bayes on the detector model.
+std::vector<double> HandTheta(const ChowLiuTree& tree, const FabMapOptions& o,
+                              const std::vector<int>& words) {
+  std::vector<double> theta;
+  for (int q = 0; q < tree.size(); ++q) {
+    const bool seen = std::count(words.begin(), words.end(), q) > 0;
+    const double prior = tree.Marginal(q);
+    const double present = prior * (seen ? o.p_z_given_e : 1 - o.p_z_given_e);
+    const double absent = (1 - prior) * (seen ? o.p_z_given_not_e : 1 - o.p_z_given_not_e);
+    theta.push_back(present / (present + absent));
+  }
+  return theta;
+}
+
+class ToyFabMap : public ::testing::TestWithParam<std::tuple<std::string, bool>> {};
+
+TEST_P(ToyFabMap, PosteriorMatchesTheFormulas) {
+  const ChowLiuTree tree = ToyTree();
+  FabMapOptions options;
+  options.new_place_model = std::get<0>(GetParam());
+  options.inverted_index = std::get<1>(GetParam());
+  options.p_z_given_not_e = 0.01;
+  const std::vector<std::vector<int>> places = {{0, 1, 3}, {0, 2, 4, 5}, {2, 5}};
+  const std::vector<std::vector<int>> training = {{0, 1}, {2, 4}, {0, 3, 5}, {}};
+  PlaceDatabase samples(6), map(6);
+  for (const auto& t : training) samples.AddPlace(t);
+  for (const auto& p : places) map.AddPlace(p);
+  FabMap fabmap(tree, options, samples);
+  fabmap.SetPlaces(map);
+  const std::vector<int> query = {0, 2, 5};
+  const FabMapResult result = fabmap.Compare(query);
+
+  std::vector<double> log_joint;
+  for (const auto& p : places) {
+    log_joint.push_back(HandLogLikelihood(tree, options, query, HandTheta(tree, options, p)) +
+                        std::log((1 - options.new_place_prior) / 3));
+  }
+  double new_place;
+  if (options.new_place_model == "mean_field") {
+    std::vector<double> prior;
+    for (int q = 0; q < 6; ++q) prior.push_back(tree.Marginal(q));
+    new_place = HandLogLikelihood(tree, options, query, prior);
+  } else {
+    double mean = 0;
+    for (const auto& t : training)
+      mean += std::exp(HandLogLikelihood(tree, options, query, HandTheta(tree, options, t)));
+    new_place = std::log(mean / training.size());
+  }
+  EXPECT_NEAR(result.new_place_log_likelihood, new_place, 1e-9);
+  log_joint.push_back(new_place + std::log(options.new_place_prior));
+  double total = 0;
+  for (const double l : log_joint) total += std::exp(l);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(result.log_likelihoods[i],
+                log_joint[i] - std::log((1 - options.new_place_prior) / 3), 1e-9);
+    EXPECT_NEAR(result.posterior[i], 0.99 * std::exp(log_joint[i]) / total + 0.01 / 4, 1e-9);
+  }
+  EXPECT_NEAR(result.new_place, 0.99 * std::exp(log_joint[3]) / total + 0.01 / 4, 1e-9);
+  // The query shares every word with place 1: it must be the best.
+  EXPECT_EQ(result.best, 1);
+}
+
+INSTANTIATE_TEST_SUITE_P(ModelsAndVersions, ToyFabMap,
+                         ::testing::Combine(::testing::Values("mean_field", "sampling"),
+                                            ::testing::Bool()));
+
+TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
+  // 300 words, 40 places (some observed several times), 20 queries.
+  std::mt19937_64 random(9);
+  std::uniform_int_distribution<int> word(0, 299);
+  const auto random_set = [&](int size) {
+    std::set<int> s;
+    while (static_cast<int>(s.size()) < size) s.insert(word(random));
+    return std::vector<int>(s.begin(), s.end());
+  };
+  std::vector<std::vector<int>> training;
+  for (int i = 0; i < 200; ++i) training.push_back(random_set(30));
+  const ChowLiuTree tree = ChowLiuTree::Train(training, 300);
+  PlaceDatabase map(300);
+  for (int i = 0; i < 40; ++i) map.AddPlace(random_set(40));
+  for (int i = 0; i < 15; ++i) map.UpdatePlace(i, random_set(40));
+  for (int i = 0; i < 5; ++i) map.UpdatePlace(i, random_set(40));
+  FabMapOptions one, two;
+  one.inverted_index = false;
+  FabMap fabmap_one(tree, one), fabmap_two(tree, two);
+  fabmap_one.SetPlaces(map);
+  fabmap_two.SetPlaces(map);
+  for (int q = 0; q < 20; ++q) {
+    const std::vector<int> query = random_set(35);
+    const FabMapResult a = fabmap_one.Compare(query), b = fabmap_two.Compare(query);
+    ASSERT_EQ(a.log_likelihoods.size(), b.log_likelihoods.size());
+    for (std::size_t i = 0; i < a.log_likelihoods.size(); ++i) {
+      EXPECT_NEAR(a.log_likelihoods[i], b.log_likelihoods[i],
+                  1e-8 * std::abs(a.log_likelihoods[i]));
+    }
+    EXPECT_EQ(a.best, b.best);
+    EXPECT_NEAR(a.new_place, b.new_place, 1e-9);
+  }
+}
+
+TEST(FabMap, AddUpdatesAMatchedPlaceAndAddsANewOne) {
+  // 300 words from independent training images; views of 40 words.
+  std::mt19937_64 random(4);
+  std::uniform_int_distribution<int> word(0, 299);
+  const auto random_set = [&](int size) {
+    std::set<int> s;
+    while (static_cast<int>(s.size()) < size) s.insert(word(random));
+    return std::vector<int>(s.begin(), s.end());
+  };
+  std::vector<std::vector<int>> training;
+  for (int i = 0; i < 200; ++i) training.push_back(random_set(40));
+  FabMap fabmap(ChowLiuTree::Train(training, 300), FabMapOptions{});
+  const std::vector<int> first = random_set(40), second = random_set(40);
+  int place = -1;
+  fabmap.Add(first, &place);
+  EXPECT_EQ(place, 0);
+  // The first view again, with a quarter of its words missed: the same place, observed twice.
+  const std::vector<int> again(first.begin(), first.begin() + 30);
+  const FabMapResult result = fabmap.Add(again, &place);
+  EXPECT_EQ(place, 0);
+  EXPECT_GT(result.posterior[0], 0.9);
+  EXPECT_EQ(fabmap.places().place(0).observations, 2);
+  fabmap.Add(second, &place);  // unrelated words: a new place
+  EXPECT_EQ(place, 1);
+  EXPECT_EQ(fabmap.places().size(), 2);
+}
+
+// Real images with the default vocabulary `make build` trains (opencv-doc photos and the
+// synthetic hall; never the EuRoC data used here).
+class RealImages : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const std::string directory = STEREO_FABMAP_SLAM_DEFAULT_VOCABULARY;
+    if (!std::filesystem::exists(directory + "/vocabulary.bin")) {
+      FAIL() << "no default vocabulary in " << directory << ": `make build` trains it";
+    }
+  }
+};
+
+TEST_F(RealImages, KnownPlacesMatchAndAnotherBuildingIsNew) {
+  const std::string directory = STEREO_FABMAP_SLAM_DEFAULT_VOCABULARY;
+  // The shipped configuration: odometry features with place recognition's selection.
+  const PlaceRecognitionOptions options = LoadPlaceRecognitionOptions(
+      RepositoryRoot() + "/config/fabmap.yaml",
+      pipeline::LoadPipelineOptions(RepositoryRoot() + "/config/euroc.yaml").features);
+  EXPECT_EQ(std::filesystem::canonical(options.vocabulary_directory),
+            std::filesystem::canonical(directory));
+  const Vocabulary vocabulary = Vocabulary::Load(directory + "/vocabulary.bin");
+  FabMap fabmap(ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), options.fabmap);
+  ImageDescriber describer{options.features};
+  const io::EurocSequence mh01 = io::EurocSequence::Open(EurocSequencePath("MH01_first10s"));
+  const io::EurocSequence v101 = io::EurocSequence::Open(EurocSequencePath("V101_micro"));
+  const auto words = [&](const io::EurocSequence& sequence, std::size_t frame) {
+    return vocabulary.WordSet(describer.Describe(sequence.LoadStereoPair(frame).left));
+  };
+  // The map: every 10th frame of MH01 as its own place.
+  PlaceDatabase map(vocabulary.size());
+  for (std::size_t i = 0; i < mh01.size(); i += 10) map.AddPlace(words(mh01, i));
+  fabmap.SetPlaces(map);
+
+  int new_in_v101 = 0, queried_v101 = 0;
+  for (std::size_t i = 0; i < v101.size(); i += 5, ++queried_v101) {
+    new_in_v101 += fabmap.Compare(words(v101, i)).new_place > 0.5 ? 1 : 0;
+  }
+  int matched_in_mh01 = 0, queried_mh01 = 0;
+  for (std::size_t i = 5; i < mh01.size(); i += 10, ++queried_mh01) {
+    const FabMapResult result = fabmap.Compare(words(mh01, i));
+    matched_in_mh01 += result.best >= 0 && result.posterior[result.best] > result.new_place ? 1 : 0;
+  }
+  RecordProperty("v101_new", std::to_string(new_in_v101) + "/" + std::to_string(queried_v101));
+  RecordProperty("mh01_matched",
+                 std::to_string(matched_in_mh01) + "/" + std::to_string(queried_mh01));
+  // "Most" of each: at least 80 %.
+  EXPECT_GE(new_in_v101, 0.8 * queried_v101);
+  EXPECT_GE(matched_in_mh01, 0.8 * queried_mh01);
+}
+
+template <typename Action>
+std::string ErrorOf(Action action) {
+  try {
+    action();
+  } catch (const io::InputError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+void FlipByte(const std::string& path, std::size_t offset) {
+  std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+  file.seekg(static_cast<std::streamoff>(offset));
+  const char byte = static_cast<char>(file.get());
+  file.seekp(static_cast<std::streamoff>(offset));
+  file.put(static_cast<char>(byte ^ 0x40));
+}
+
+TEST(FabMapFiles, RoundTripsExactlyAndRefusesDamage) {
+  TemporaryDirectory temp;
+  cv::Mat descriptors(400, 32, CV_8U);
+  cv::randu(descriptors, 0, 256);
+  VocabularyOptions options;
+  options.branching = 4;
+  options.depth = 3;
+  const Vocabulary vocabulary = Vocabulary::Train(descriptors, options);
+  EXPECT_GT(vocabulary.size(), 30);
+  EXPECT_LE(vocabulary.size(), 64);
+  const ChowLiuTree tree = ToyTree();
+  PlaceDatabase places(6);
+  places.AddPlace({0, 3});
+  places.UpdatePlace(0, {3, 5});
+  places.AddPlace({1});
+
+  vocabulary.Save(temp.path() + "/v.bin");
+  tree.Save(temp.path() + "/t.bin");
+  places.Save(temp.path() + "/p.bin");
+  EXPECT_TRUE(Vocabulary::Load(temp.path() + "/v.bin") == vocabulary);
+  EXPECT_TRUE(ChowLiuTree::Load(temp.path() + "/t.bin") == tree);
+  PlaceDatabase loaded = PlaceDatabase::Load(temp.path() + "/p.bin");
+  EXPECT_TRUE(loaded == places);
+  EXPECT_EQ(Vocabulary::Load(temp.path() + "/v.bin").Quantize(descriptors),
+            vocabulary.Quantize(descriptors));
+
+  // A flipped byte in the payload, a truncated file, another kind of file: refused, clearly.
+  std::filesystem::copy_file(temp.path() + "/p.bin", temp.path() + "/bad.bin");
+  FlipByte(temp.path() + "/bad.bin", 30);
+  EXPECT_NE(ErrorOf([&] {
+              loaded = PlaceDatabase::Load(temp.path() + "/bad.bin");
+            }).find("checksum mismatch"),
+            std::string::npos);
+  std::filesystem::resize_file(temp.path() + "/v.bin",
+                               std::filesystem::file_size(temp.path() + "/v.bin") - 5);
+  EXPECT_NE(ErrorOf([&] { Vocabulary::Load(temp.path() + "/v.bin"); }).find("truncated"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ChowLiuTree::Load(temp.path() + "/p.bin"); }).find("wrong magic number"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ChowLiuTree::Load(temp.path() + "/none.bin"); }).find("cannot open"),
+            std::string::npos);
+  // The failed loads left the loaded state as it was.
+  EXPECT_TRUE(loaded == places);
+}
+
+TEST(Vocabulary, QuantisesToTheNearestWordAndTrainsOnFloatDescriptors) {
+  // Binary: a descriptor one bit away from a training descriptor falls into the same word in
+  // nearly every case (a bit flip rarely crosses a cluster border).
+  cv::Mat binary(2000, 64, CV_8U);
+  cv::randu(binary, 0, 256);
+  const Vocabulary words = Vocabulary::Train(binary, VocabularyOptions{});
+  cv::Mat nudged = binary.clone();
+  for (int r = 0; r < nudged.rows; ++r) nudged.at<std::uint8_t>(r, r % 64) ^= 1;
+  const std::vector<int> a = words.Quantize(binary), b = words.Quantize(nudged);
+  int same = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) same += a[i] == b[i] ? 1 : 0;
+  EXPECT_GE(same, 0.9 * a.size());
+  // Float (SIFT-like): two well separated blobs end in different words.
+  cv::Mat floats(200, 16, CV_32F);
+  cv::randn(floats, 0, 1);
+  floats.rowRange(100, 200) += 50.0f;
+  VocabularyOptions small;
+  small.branching = 2;
+  small.depth = 1;
+  const Vocabulary float_words = Vocabulary::Train(floats, small);
+  EXPECT_FALSE(float_words.binary());
+  EXPECT_NE(float_words.Quantize(floats, 0), float_words.Quantize(floats, 150));
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
