@@ -44,3 +44,8 @@ print("| --- | " + " | ".join("---" for _ in sequences) + " |")
 for name, cell in rows:
     print(f"| {name} | " + " | ".join(cell(summaries[q]) for q in sequences) + " |")
 PYTHON
+
+echo
+echo "place recognition (build/bin/benchmark_fabmap: synthetic words, fixed seeds, one core):"
+echo
+build/bin/benchmark_fabmap

@@ -26,6 +26,7 @@ void FabMapOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("location_prior", &location_prior);
   visitor.Visit("motion_weight", &motion_weight);
   visitor.Visit("inverted_index", &inverted_index);
+  visitor.Visit("exact_tree_corrections", &exact_tree_corrections);
   visitor.Visit("match_threshold", &match_threshold);
 }
 
@@ -149,8 +150,11 @@ FabMap::Query FabMap::Prepare(const std::vector<int>& words) const {
     if (w < 0 || w >= model_.size()) throw std::invalid_argument("word outside the vocabulary");
     query.present[static_cast<std::size_t>(w)] = 1;
   }
+  // FAB-MAP 1.0 and exact 2.0 see every absent child of a view's word with its parent present.
+  const bool children = !options_.inverted_index || options_.exact_tree_corrections;
   for (const int w : words) {
     query.affected.push_back(w);
+    if (!children) continue;
     for (const int child : model_.tree().children(w)) {
       if (!query.present[static_cast<std::size_t>(child)]) query.affected.push_back(child);
     }
@@ -192,31 +196,52 @@ std::vector<double> FabMap::LogLikelihoodsIndexed(const IndexedPlaces& places,
   const PlaceDatabase& database = places.database;
   std::vector<double> scores(static_cast<std::size_t>(database.size()), 0.0);
   std::map<int, double> common;  // by number of observations
+  // Per affected word: its state in the query, and the change for a place seen once that showed
+  // it once (the same for all such places).
+  struct Affected {
+    int word;
+    bool z, zp;
+    double once;
+  };
+  std::vector<Affected> affected;
+  affected.reserve(query.affected.size());
   for (const int u : query.affected) {
     const bool z = query.present[static_cast<std::size_t>(u)];
     const bool zp = tree.parent(u) >= 0 && query.present[static_cast<std::size_t>(tree.parent(u))];
-    // The change for a place seen once that showed the word once: the same for all such places.
     const double theta_hit = model_.Theta(u, 1, 1), theta_none = model_.Theta(u, 0, 1);
-    const double once =
-        (model_.Term(u, z, zp, theta_hit) - model_.Term(u, z, zp, theta_none)) -
-        (model_.Term(u, false, false, theta_hit) - model_.Term(u, false, false, theta_none));
-    const std::vector<std::uint32_t>& list = database.PlacesWith(u);
-    const std::vector<std::uint16_t>& hits = database.HitsOf(u);
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const std::uint32_t place = list[i];
-      const int n = database.place(static_cast<int>(place)).observations;
-      if (n == 1) {
-        scores[place] += once;
-        continue;
-      }
-      const double with = model_.Theta(u, hits[i], n), without = model_.Theta(u, 0, n);
-      scores[place] += (model_.Term(u, z, zp, with) - model_.Term(u, z, zp, without)) -
-                       (model_.Term(u, false, false, with) - model_.Term(u, false, false, without));
+    affected.push_back(
+        {u, z, zp,
+         (model_.Term(u, z, zp, theta_hit) - model_.Term(u, z, zp, theta_none)) -
+             (model_.Term(u, false, false, theta_hit) - model_.Term(u, false, false, theta_none))});
+  }
+  if (database.all_observed_once()) {
+    // The hot path: one addition per posting, streaming the compressed lists.
+    double* score = scores.data();
+    for (const Affected& a : affected) {
+      const double once = a.once;
+      database.PlacesWith(a.word).ForEach([&](std::uint32_t place) { score[place] += once; });
+    }
+  } else {
+    const std::vector<std::int32_t>& observations = database.observations();
+    for (const Affected& a : affected) {
+      database.PlacesWith(a.word).ForEach([&](std::uint32_t place) {
+        const int n = observations[place];
+        if (n == 1) {
+          scores[place] += a.once;
+          return;
+        }
+        const double with =
+            model_.Theta(a.word, database.HitsOf(static_cast<int>(place), a.word), n);
+        const double without = model_.Theta(a.word, 0, n);
+        scores[place] +=
+            (model_.Term(a.word, a.z, a.zp, with) - model_.Term(a.word, a.z, a.zp, without)) -
+            (model_.Term(a.word, false, false, with) - model_.Term(a.word, false, false, without));
+      });
     }
   }
   std::vector<double> result(scores.size());
   for (std::size_t i = 0; i < scores.size(); ++i) {
-    const int n = database.place(static_cast<int>(i)).observations;
+    const int n = database.observations()[i];
     auto it = common.find(n);
     if (it == common.end()) {
       double sum = model_.EmptySum(n);

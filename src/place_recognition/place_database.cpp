@@ -22,18 +22,12 @@ void PlaceDatabase::Validate(const std::vector<int>& words) const {
   }
 }
 
-void PlaceDatabase::Index(int place, int word, std::uint16_t hits) {
-  std::vector<std::uint32_t>& list = postings_[static_cast<std::size_t>(word)];
-  std::vector<std::uint16_t>& list_hits = posting_hits_[static_cast<std::size_t>(word)];
-  const auto position =
-      std::lower_bound(list.begin(), list.end(), static_cast<std::uint32_t>(place));
-  const std::size_t offset = static_cast<std::size_t>(position - list.begin());
-  if (position != list.end() && *position == static_cast<std::uint32_t>(place)) {
-    list_hits[offset] = hits;
-  } else {
-    list.insert(position, static_cast<std::uint32_t>(place));
-    list_hits.insert(list_hits.begin() + static_cast<std::ptrdiff_t>(offset), hits);
-  }
+int PlaceDatabase::HitsOf(int place, int word) const {
+  const Place& p = places_[static_cast<std::size_t>(place)];
+  const auto position = std::lower_bound(p.words.begin(), p.words.end(), word);
+  return position != p.words.end() && *position == word
+             ? p.hits[static_cast<std::size_t>(position - p.words.begin())]
+             : 0;
 }
 
 int PlaceDatabase::AddPlace(const std::vector<int>& words) {
@@ -44,14 +38,16 @@ int PlaceDatabase::AddPlace(const std::vector<int>& words) {
   place.words.assign(words.begin(), words.end());
   place.hits.assign(words.size(), 1);
   places_.push_back(std::move(place));
-  for (const int word : words) Index(index, word, 1);
+  observations_.push_back(1);
+  for (const int word : words) Index(index, word);
   return index;
 }
 
 void PlaceDatabase::UpdatePlace(int index, const std::vector<int>& words) {
   Validate(words);
   Place& place = places_.at(static_cast<std::size_t>(index));
-  ++place.observations;
+  if (++place.observations == 2) ++observed_more_than_once_;
+  observations_[static_cast<std::size_t>(index)] = place.observations;
   for (const int word : words) {
     const auto position = std::lower_bound(place.words.begin(), place.words.end(), word);
     const std::size_t offset = static_cast<std::size_t>(position - place.words.begin());
@@ -61,16 +57,15 @@ void PlaceDatabase::UpdatePlace(int index, const std::vector<int>& words) {
       place.words.insert(position, word);
       place.hits.insert(place.hits.begin() + static_cast<std::ptrdiff_t>(offset), 1);
     }
-    Index(index, word, place.hits[offset]);
+    Index(index, word);
   }
 }
 
 std::size_t PlaceDatabase::MemoryBytes() const {
-  std::size_t bytes =
-      places_.capacity() * sizeof(Place) + postings_.capacity() * 2 * sizeof(std::vector<int>);
+  std::size_t bytes = places_.capacity() * (sizeof(Place) + sizeof(std::int32_t)) +
+                      postings_.capacity() * sizeof(PostingList);
   for (const Place& p : places_) bytes += p.words.capacity() * 4 + p.hits.capacity() * 2;
-  for (std::size_t w = 0; w < postings_.size(); ++w)
-    bytes += postings_[w].capacity() * 4 + posting_hits_[w].capacity() * 2;
+  for (const PostingList& list : postings_) bytes += list.bytes();
   return bytes;
 }
 
@@ -105,8 +100,10 @@ PlaceDatabase PlaceDatabase::Load(const std::string& path) {
     }
     for (std::size_t w = 0; w < place.words.size(); ++w) {
       if (place.hits[w] < 1 || place.hits[w] > place.observations) reader.Fail("bad hit count");
-      database.Index(static_cast<int>(database.places_.size()), place.words[w], place.hits[w]);
+      database.Index(static_cast<int>(database.places_.size()), place.words[w]);
     }
+    database.observations_.push_back(place.observations);
+    if (place.observations > 1) ++database.observed_more_than_once_;
     database.places_.push_back(std::move(place));
   }
   reader.ExpectEnd();

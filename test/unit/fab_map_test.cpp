@@ -115,6 +115,7 @@ TEST_P(ToyFabMap, PosteriorMatchesTheFormulas) {
   FabMapOptions options;
   options.new_place_model = std::get<0>(GetParam());
   options.inverted_index = std::get<1>(GetParam());
+  options.exact_tree_corrections = true;  // the formulas are FAB-MAP 1.0's, to the digit
   options.p_z_given_not_e = 0.01;
   const std::vector<std::vector<int>> places = {{0, 1, 3}, {0, 2, 4, 5}, {2, 5}};
   const std::vector<std::vector<int>> training = {{0, 1}, {2, 4}, {0, 3, 5}, {}};
@@ -161,7 +162,7 @@ INSTANTIATE_TEST_SUITE_P(ModelsAndVersions, ToyFabMap,
                                             ::testing::Bool()));
 
 TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
-  // 300 words, 40 places (some observed several times), 20 queries.
+  // 300 words, 40 places (some observed several times), 20 queries resembling places.
   std::mt19937_64 random(9);
   std::uniform_int_distribution<int> word(0, 299);
   const auto random_set = [&](int size) {
@@ -176,21 +177,36 @@ TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
   for (int i = 0; i < 40; ++i) map.AddPlace(random_set(40));
   for (int i = 0; i < 15; ++i) map.UpdatePlace(i, random_set(40));
   for (int i = 0; i < 5; ++i) map.UpdatePlace(i, random_set(40));
-  FabMapOptions one, two;
+  FabMapOptions one, exact, fast;
   one.inverted_index = false;
-  FabMap fabmap_one(tree, one), fabmap_two(tree, two);
+  exact.exact_tree_corrections = true;
+  FabMap fabmap_one(tree, one), fabmap_exact(tree, exact), fabmap_fast(tree, fast);
   fabmap_one.SetPlaces(map);
-  fabmap_two.SetPlaces(map);
+  fabmap_exact.SetPlaces(map);
+  fabmap_fast.SetPlaces(map);
   for (int q = 0; q < 20; ++q) {
-    const std::vector<int> query = random_set(35);
-    const FabMapResult a = fabmap_one.Compare(query), b = fabmap_two.Compare(query);
+    // Half of a place's words and some random others, as a real revisit would show.
+    const std::vector<int>& place = map.place(2 * q).words;
+    std::set<int> words(place.begin(),
+                        place.begin() + static_cast<std::ptrdiff_t>(place.size() / 2));
+    for (const int w : random_set(15)) words.insert(w);
+    const std::vector<int> query(words.begin(), words.end());
+    const FabMapResult a = fabmap_one.Compare(query), b = fabmap_exact.Compare(query),
+                       c = fabmap_fast.Compare(query);
     ASSERT_EQ(a.log_likelihoods.size(), b.log_likelihoods.size());
+    // Exact FAB-MAP 2.0 rearranges FAB-MAP 1.0's sum: the same numbers.
     for (std::size_t i = 0; i < a.log_likelihoods.size(); ++i) {
       EXPECT_NEAR(a.log_likelihoods[i], b.log_likelihoods[i],
                   1e-8 * std::abs(a.log_likelihoods[i]));
     }
     EXPECT_EQ(a.best, b.best);
     EXPECT_NEAR(a.new_place, b.new_place, 1e-9);
+    // The default FAB-MAP 2.0 leaves out the corrections of absent children: it still finds
+    // the place the view came from (the order among the unrelated places, whose likelihoods
+    // nearly tie, may differ).
+    EXPECT_EQ(c.best, a.best);
+    EXPECT_EQ(a.best, 2 * q);
+    EXPECT_GT(c.posterior[static_cast<std::size_t>(c.best)], 0.9);
   }
 }
 

@@ -18,9 +18,14 @@ struct FabMapOptions {
   double smoothing = 0.99;       // posterior smoothing: p -> s p + (1 - s) / (places + 1)
   std::string new_place_model = "mean_field";  // mean_field, or sampling (training places)
   std::string location_prior =
-      "uniform";                 // uniform, or motion (favours the last match's neighbours)
-  double motion_weight = 0.6;    // motion prior: share of the existing-place mass on neighbours
-  bool inverted_index = true;    // FAB-MAP 2.0 (inverted index); false: FAB-MAP 1.0 (every word)
+      "uniform";               // uniform, or motion (favours the last match's neighbours)
+  double motion_weight = 0.6;  // motion prior: share of the existing-place mass on neighbours
+  bool inverted_index = true;  // FAB-MAP 2.0 (inverted index); false: FAB-MAP 1.0 (every word)
+  // FAB-MAP 2.0 only. false: a word absent from the view is scored as if its Chow-Liu parent
+  // were absent too, so that only the view's own words are looked up (half the index reads;
+  // it finds the same best place as FAB-MAP 1.0, see the tests). true: also correct the absent
+  // children of the view's words, giving exactly FAB-MAP 1.0's log-likelihoods and ranking.
+  bool exact_tree_corrections = false;
   double match_threshold = 0.5;  // Add(): update the best place at this posterior, else add one
 
   void Visit(io::OptionVisitor& visitor);

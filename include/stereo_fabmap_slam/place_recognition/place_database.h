@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "stereo_fabmap_slam/place_recognition/posting_list.h"
+
 namespace stereo_fabmap_slam::place_recognition {
 
 // A place: how often it was observed, and for each word it showed, in how many observations.
@@ -14,8 +16,8 @@ struct Place {
 };
 
 // Places with an inverted index (word -> places that showed it), so that a query visits only the
-// places sharing its words. Memory per place: its words (4 + 2 bytes each, twice: the place and
-// the index), independent of the vocabulary size.
+// places sharing its words. Memory per place: its words (4 + 2 bytes each in the place, about 1
+// in the index), independent of the vocabulary size.
 class PlaceDatabase {
  public:
   explicit PlaceDatabase(int vocabulary_size = 0)
@@ -28,12 +30,14 @@ class PlaceDatabase {
   int size() const { return static_cast<int>(places_.size()); }
   int vocabulary_size() const { return static_cast<int>(postings_.size()); }
   const Place& place(int index) const { return places_[static_cast<std::size_t>(index)]; }
-  const std::vector<std::uint32_t>& PlacesWith(int word) const {
+  const PostingList& PlacesWith(int word) const {
     return postings_[static_cast<std::size_t>(word)];
   }
-  const std::vector<std::uint16_t>& HitsOf(int word) const {
-    return posting_hits_[static_cast<std::size_t>(word)];
-  }
+  // Observations of `place` that showed `word` (0 if none).
+  int HitsOf(int place, int word) const;
+  // Observations per place, compact (the query's inner loop reads it per posting).
+  const std::vector<std::int32_t>& observations() const { return observations_; }
+  bool all_observed_once() const { return observed_more_than_once_ == 0; }
   std::size_t MemoryBytes() const;  // of places and index, for the benchmark
 
   void Save(const std::string& path) const;
@@ -43,12 +47,14 @@ class PlaceDatabase {
 
  private:
   void Validate(const std::vector<int>& words) const;
-  void Index(int place, int word, std::uint16_t hits);
+  void Index(int place, int word) {
+    postings_[static_cast<std::size_t>(word)].Insert(static_cast<std::uint32_t>(place));
+  }
 
   std::vector<Place> places_;
-  std::vector<std::vector<std::uint32_t>> postings_;  // per word, increasing place ids
-  std::vector<std::vector<std::uint16_t>> posting_hits_ =
-      std::vector<std::vector<std::uint16_t>>(postings_.size());
+  std::vector<std::int32_t> observations_;
+  int observed_more_than_once_ = 0;
+  std::vector<PostingList> postings_;  // per word
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition

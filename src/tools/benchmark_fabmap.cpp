@@ -1,0 +1,110 @@
+// Speed and memory figures of place recognition for docs/benchmarks.md (make bench): Chow-Liu
+// training at 10,000 words, quantisation, FAB-MAP 2.0 query time against map size, memory per
+// place. Synthetic word data with fixed seeds: the figures depend on sizes, not on content.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/vocabulary.h"
+
+namespace {
+
+using namespace stereo_fabmap_slam::place_recognition;  // NOLINT: a tool's main file
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+double PeakResidentMegabytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;
+}
+
+class RandomWords {
+ public:
+  RandomWords(int vocabulary, std::uint64_t seed) : random_(seed), word_(0, vocabulary - 1) {}
+  std::vector<int> Set(int size) {
+    std::set<int> words;
+    while (static_cast<int>(words.size()) < size) words.insert(word_(random_));
+    return {words.begin(), words.end()};
+  }
+
+ private:
+  std::mt19937_64 random_;
+  std::uniform_int_distribution<int> word_;
+};
+
+}  // namespace
+
+int main() {
+  constexpr int kVocabulary = 10000;
+  std::printf("| measurement | figure |\n| --- | --- |\n");
+
+  // Chow-Liu tree: 10,000 words, 5,000 training images of 300 words each.
+  RandomWords words(kVocabulary, 1);
+  std::vector<std::vector<int>> training;
+  for (int i = 0; i < 5000; ++i) training.push_back(words.Set(300));
+  const double memory_before = PeakResidentMegabytes();
+  auto start = Clock::now();
+  const ChowLiuTree tree = ChowLiuTree::Train(training, kVocabulary);
+  std::printf("| Chow-Liu tree, 10,000 words, 5,000 images of 300 words: time | %.1f s |\n",
+              Seconds(start));
+  std::printf("| Chow-Liu tree: peak memory added | %.0f MB |\n",
+              PeakResidentMegabytes() - memory_before);
+
+  // Quantisation: 1,000 BRISK-sized (64-byte) descriptors into a 10,000-word vocabulary.
+  cv::Mat training_descriptors(100000, 64, CV_8U);
+  cv::randu(training_descriptors, 0, 256);
+  start = Clock::now();
+  const Vocabulary vocabulary = Vocabulary::Train(training_descriptors, VocabularyOptions{});
+  const double vocabulary_seconds = Seconds(start);
+  cv::Mat query_descriptors(1000, 64, CV_8U);
+  cv::randu(query_descriptors, 0, 256);
+  start = Clock::now();
+  constexpr int kRepeats = 50;
+  for (int r = 0; r < kRepeats; ++r) vocabulary.WordSet(query_descriptors);
+  std::printf("| vocabulary training, 100,000 descriptors -> %d words | %.1f s |\n",
+              vocabulary.size(), vocabulary_seconds);
+  std::printf("| quantising 1,000 binary descriptors into %d words | %.3f ms |\n",
+              vocabulary.size(), Seconds(start) * 1000.0 / kRepeats);
+
+  // FAB-MAP 2.0 queries: 1,000 words seen per image; maps of 1,000 and 100,000 places of 1,000
+  // words each.
+  for (const int places : {1000, 100000}) {
+    FabMap fabmap(tree, FabMapOptions{});
+    PlaceDatabase map(kVocabulary);
+    RandomWords place_words(kVocabulary, 2);
+    for (int p = 0; p < places; ++p) map.AddPlace(place_words.Set(1000));
+    const double bytes_per_place = static_cast<double>(map.MemoryBytes()) / places;
+    fabmap.SetPlaces(std::move(map));
+    RandomWords query_words(kVocabulary, 3);
+    std::vector<std::vector<int>> queries;
+    for (int q = 0; q < 20; ++q) queries.push_back(query_words.Set(1000));
+    fabmap.Compare(queries[0]);  // warm caches
+    start = Clock::now();
+    for (const auto& query : queries) fabmap.Compare(query);
+    std::printf("| FAB-MAP 2.0 query, 1,000 words seen, %d places | %.2f ms |\n", places,
+                Seconds(start) * 1000.0 / queries.size());
+    std::printf("| memory per place (1,000 words), %d places | %.0f bytes |\n", places,
+                bytes_per_place);
+  }
+  // Memory per place follows the words it holds, not the vocabulary.
+  for (const int vocabulary_size : {10000, 100000}) {
+    for (const int place_size : {100, 1000}) {
+      PlaceDatabase map(vocabulary_size);
+      RandomWords place_words(vocabulary_size, 4);
+      for (int p = 0; p < 2000; ++p) map.AddPlace(place_words.Set(place_size));
+      std::printf("| memory per place, %d words, vocabulary %d (index included) | %.0f bytes |\n",
+                  place_size, vocabulary_size, static_cast<double>(map.MemoryBytes()) / 2000);
+    }
+  }
+  return 0;
+}
