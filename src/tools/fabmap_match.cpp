@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "command_line.h"
+#include "image_sources.h"
 #include "stereo_fabmap_slam/io/euroc_sequence.h"
 #include "stereo_fabmap_slam/pipeline/pipeline_options.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
@@ -30,33 +31,6 @@ constexpr char kUsage[] =
     "beside it (default: the vocabulary_directory of config/fabmap.yaml). Prints\n"
     "CSV: image,timestamp,place,best_place,best_posterior,new_place_probability\n"
     "(place: the place the image was added to or updated; best_place -1 while the map is empty).\n";
-
-struct Image {
-  std::string path;
-  double timestamp;
-};
-
-std::vector<Image> ImagesOf(const std::string& source, int every) {
-  std::vector<Image> images;
-  if (fs::is_directory(source + "/mav0") || fs::is_directory(source + "/cam0")) {
-    const io::EurocSequence sequence = io::EurocSequence::Open(source);
-    for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(every)) {
-      images.push_back({sequence.frames()[i].left_path, sequence.frames()[i].timestamp_ns * 1e-9});
-    }
-    return images;
-  }
-  std::vector<std::string> paths;
-  for (const auto& entry : fs::directory_iterator(source)) {
-    const std::string extension = entry.path().extension().string();
-    if (extension == ".png" || extension == ".jpg" || extension == ".jpeg")
-      paths.push_back(entry.path().string());
-  }
-  std::sort(paths.begin(), paths.end());
-  for (std::size_t i = 0; i < paths.size(); i += static_cast<std::size_t>(every)) {
-    images.push_back({paths[i], static_cast<double>(i)});
-  }
-  return images;
-}
 
 }  // namespace
 
@@ -99,7 +73,7 @@ int main(int argc, char** argv) {
         place_recognition::PlaceDatabase::Load(directory + "/training_places.bin"));
     place_recognition::ImageDescriber describer(options.features);
     std::printf("image,timestamp,place,best_place,best_posterior,new_place_probability\n");
-    for (const Image& image : ImagesOf(args->positional()[0], every)) {
+    for (const tools::ImageSource& image : tools::ListImages(args->positional()[0], every)) {
       const cv::Mat pixels = cv::imread(image.path, cv::IMREAD_GRAYSCALE);
       if (pixels.empty()) throw std::runtime_error(image.path + ": cannot read image");
       int place = -1;

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "command_line.h"
+#include "image_sources.h"
 #include "stereo_fabmap_slam/io/euroc_sequence.h"
 #include "stereo_fabmap_slam/pipeline/pipeline_options.h"
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
@@ -34,25 +35,6 @@ constexpr char kUsage[] =
     "selection, vocabulary size and spacing of --fabmap-config (default config/fabmap.yaml);\n"
     "the flags override the latter. Writes DIR/vocabulary.bin (branching^depth words at most),\n"
     "DIR/chow_liu_tree.bin and DIR/training_places.bin.\n";
-
-std::vector<std::string> ImagesOf(const std::string& source, int spacing) {
-  std::vector<std::string> images;
-  if (fs::is_directory(source + "/mav0") || fs::is_directory(source + "/cam0")) {
-    const io::EurocSequence sequence = io::EurocSequence::Open(source);
-    for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(spacing)) {
-      images.push_back(sequence.frames()[i].left_path);
-    }
-    return images;
-  }
-  if (!fs::is_directory(source)) throw std::runtime_error(source + ": no such folder");
-  for (const auto& entry : fs::directory_iterator(source)) {
-    const std::string extension = entry.path().extension().string();
-    if (extension == ".png" || extension == ".jpg" || extension == ".jpeg")
-      images.push_back(entry.path().string());
-  }
-  std::sort(images.begin(), images.end());
-  return images;
-}
 
 }  // namespace
 
@@ -89,9 +71,9 @@ int main(int argc, char** argv) {
     vocabulary_options.Validate();
     std::vector<std::string> images;
     for (const std::string& source : args->positional()) {
-      const std::vector<std::string> found = ImagesOf(source, spacing);
+      const std::vector<tools::ImageSource> found = tools::ListImages(source, spacing);
       std::printf("%s: %zu training images\n", source.c_str(), found.size());
-      images.insert(images.end(), found.begin(), found.end());
+      for (const tools::ImageSource& image : found) images.push_back(image.path);
     }
     if (images.size() < 2) throw std::runtime_error("need at least two training images");
 

@@ -45,6 +45,21 @@ std::vector<std::vector<int>> SampleTree(const std::vector<int>& parents, int sa
   return sets;
 }
 
+// Sets of distinct random words, sorted, from a seeded generator.
+class RandomWordSets {
+ public:
+  RandomWordSets(int vocabulary, std::uint64_t seed) : random_(seed), word_(0, vocabulary - 1) {}
+  std::vector<int> Next(int size) {
+    std::set<int> words;
+    while (static_cast<int>(words.size()) < size) words.insert(word_(random_));
+    return {words.begin(), words.end()};
+  }
+
+ private:
+  std::mt19937_64 random_;
+  std::uniform_int_distribution<int> word_;
+};
+
 std::set<std::pair<int, int>> Edges(const std::vector<int>& parents) {
   std::set<std::pair<int, int>> edges;
   for (std::size_t w = 0; w < parents.size(); ++w) {
@@ -163,13 +178,8 @@ INSTANTIATE_TEST_SUITE_P(ModelsAndVersions, ToyFabMap,
 
 TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
   // 300 words, 40 places (some observed several times), 20 queries resembling places.
-  std::mt19937_64 random(9);
-  std::uniform_int_distribution<int> word(0, 299);
-  const auto random_set = [&](int size) {
-    std::set<int> s;
-    while (static_cast<int>(s.size()) < size) s.insert(word(random));
-    return std::vector<int>(s.begin(), s.end());
-  };
+  RandomWordSets random_sets(300, 9);
+  const auto random_set = [&](int size) { return random_sets.Next(size); };
   std::vector<std::vector<int>> training;
   for (int i = 0; i < 200; ++i) training.push_back(random_set(30));
   const ChowLiuTree tree = ChowLiuTree::Train(training, 300);
@@ -212,13 +222,8 @@ TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
 
 TEST(FabMap, AddUpdatesAMatchedPlaceAndAddsANewOne) {
   // 300 words from independent training images; views of 40 words.
-  std::mt19937_64 random(4);
-  std::uniform_int_distribution<int> word(0, 299);
-  const auto random_set = [&](int size) {
-    std::set<int> s;
-    while (static_cast<int>(s.size()) < size) s.insert(word(random));
-    return std::vector<int>(s.begin(), s.end());
-  };
+  RandomWordSets random_sets(300, 4);
+  const auto random_set = [&](int size) { return random_sets.Next(size); };
   std::vector<std::vector<int>> training;
   for (int i = 0; i < 200; ++i) training.push_back(random_set(40));
   FabMap fabmap(ChowLiuTree::Train(training, 300), FabMapOptions{});
