@@ -1,6 +1,9 @@
 // Every shipped configuration file parses; bad files are refused with file, line and reason.
 #include "stereo_fabmap_slam/pipeline/pipeline_options.h"
 
+#include "stereo_fabmap_slam/camera/camera_calibration.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+
 #include <filesystem>
 #include <sstream>
 
@@ -22,16 +25,29 @@ std::string ErrorOf(Action action) {
   return "";
 }
 
-TEST(PipelineOptions, EveryShippedOdometryConfigParses) {
-  int parsed = 0;
+TEST(PipelineOptions, EveryShippedConfigFileParses) {
+  // Each YAML in config/ with the reader it is meant for: calibration, place recognition, or
+  // odometry (euroc.yaml and its presets).
+  int odometry = 0, others = 0;
+  const pipeline::PipelineOptions defaults;
   for (const auto& entry : std::filesystem::directory_iterator(RepositoryRoot() + "/config")) {
     const std::string path = entry.path().string();
-    if (entry.path().extension() != ".yaml" || path.find("euroc_stereo") != std::string::npos)
-      continue;
-    EXPECT_NO_THROW(pipeline::LoadPipelineOptions(path)) << path;
-    ++parsed;
+    const std::string name = entry.path().filename().string();
+    if (entry.path().extension() != ".yaml") continue;
+    if (name == "euroc_stereo.yaml") {
+      EXPECT_NO_THROW(camera::ReadStereoCalibrationYaml(path)) << path;
+      ++others;
+    } else if (name == "fabmap.yaml") {
+      EXPECT_NO_THROW(place_recognition::LoadPlaceRecognitionOptions(path, defaults.features))
+          << path;
+      ++others;
+    } else {
+      EXPECT_NO_THROW(pipeline::LoadPipelineOptions(path)) << path;
+      ++odometry;
+    }
   }
-  EXPECT_GE(parsed, 4);  // euroc.yaml and the three keyframe presets
+  EXPECT_EQ(odometry, 4);  // euroc.yaml and the three keyframe presets
+  EXPECT_EQ(others, 2);
 }
 
 TEST(PipelineOptions, DefaultsEqualTheShippedEurocFile) {
