@@ -11,7 +11,7 @@ namespace stereo_fabmap_slam::features {
 
 // A corner detector for one camera stream.
 // - For AGAST and FAST with adaptive_threshold, the threshold follows the scene: after each
-//   image it moves towards a raw corner count of 2 to 4 times max_features, so that the next,
+//   image it moves towards a raw corner count of 1.5 to 3 times max_features, so that the next,
 //   similar image costs a bounded detection time.
 // - For AGAST and FAST, detection can run on bands of rows (on different threads) with the same
 //   result as on the whole image.

@@ -15,7 +15,7 @@ struct FeatureOptions {
   int max_right_features = 1500;  // stereo candidates kept in the right image (strongest first)
   int detector_threshold = 20;    // AGAST / FAST intensity threshold (the start value if adaptive)
   // AGAST / FAST: after each image, move the threshold (within [min, max]) so that the next one
-  // yields between 2 and 4 times max_features raw corners. This keeps detection time and the
+  // yields between 1.5 and 3 times max_features raw corners. This keeps detection time and the
   // number of candidates steady from bland walls to cluttered rooms.
   bool adaptive_threshold = true;
   int min_detector_threshold = 5;
