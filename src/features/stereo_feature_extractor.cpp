@@ -6,12 +6,6 @@
 
 namespace stereo_fabmap_slam::features {
 
-int StereoFeatures::CountWithDepth() const {
-  int count = 0;
-  for (std::size_t i = 0; i < size(); ++i) count += HasDepth(i) ? 1 : 0;
-  return count;
-}
-
 StereoFeatureExtractor::StereoFeatureExtractor(const FeatureOptions& feature_options,
                                                const StereoMatcherOptions& stereo_options,
                                                const camera::StereoCamera& camera)

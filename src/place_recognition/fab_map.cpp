@@ -239,22 +239,28 @@ std::vector<double> FabMap::LogLikelihoodsIndexed(const IndexedPlaces& places,
       });
     }
   }
+  // The part of the sum shared by all places observed equally often: computed once per distinct
+  // observation count (almost always just one), from the affected words' states above.
+  const auto shared = [&](int n) {
+    auto it = common.find(n);
+    if (it != common.end()) return it->second;
+    double sum = model_.EmptySum(n);
+    for (const Affected& a : affected) {
+      const double theta = model_.Theta(a.word, 0, n);
+      sum += model_.Term(a.word, a.z, a.zp, theta) - model_.Term(a.word, false, false, theta);
+    }
+    return common.emplace(n, sum).first->second;
+  };
   std::vector<double> result(scores.size());
+  int last_n = -1;
+  double last_shared = 0;
   for (std::size_t i = 0; i < scores.size(); ++i) {
     const int n = database.observations()[i];
-    auto it = common.find(n);
-    if (it == common.end()) {
-      double sum = model_.EmptySum(n);
-      for (const int u : query.affected) {
-        const bool z = query.present[static_cast<std::size_t>(u)];
-        const bool zp =
-            tree.parent(u) >= 0 && query.present[static_cast<std::size_t>(tree.parent(u))];
-        const double theta = model_.Theta(u, 0, n);
-        sum += model_.Term(u, z, zp, theta) - model_.Term(u, false, false, theta);
-      }
-      it = common.emplace(n, sum).first;
+    if (n != last_n) {
+      last_n = n;
+      last_shared = shared(n);
     }
-    result[i] = it->second + places.hit_sums[i] + scores[i];
+    result[i] = last_shared + places.hit_sums[i] + scores[i];
   }
   return result;
 }

@@ -19,11 +19,6 @@ std::vector<std::uint32_t> PostingList::Decode() const {
   return places;
 }
 
-bool PostingList::Contains(std::uint32_t place) const {
-  const std::vector<std::uint32_t> places = Decode();
-  return std::binary_search(places.begin(), places.end(), place);
-}
-
 void PostingList::Insert(std::uint32_t place) {
   if (count_ == 0 || place > last_) {
     Append(count_ == 0 ? place : place - last_);

@@ -42,7 +42,6 @@ class LocalBundleAdjuster {
 
   // Latest pose (T_world_camera) of every keyframe so far, by id.
   std::map<std::int64_t, Eigen::Isometry3d> KeyframePoses() const;
-  std::size_t point_count() const { return points_.size(); }
 
  private:
   struct Observation {

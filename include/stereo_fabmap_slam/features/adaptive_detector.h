@@ -30,7 +30,6 @@ class AdaptiveDetector {
   void Adapt(std::size_t corner_count);
 
   bool supports_bands() const { return segment_test_; }
-  int threshold() const { return threshold_; }
 
  private:
   FeatureOptions options_;

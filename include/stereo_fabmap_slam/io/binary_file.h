@@ -25,9 +25,6 @@ class BinaryWriter {
     const auto* bytes = reinterpret_cast<const std::uint8_t*>(values.data());
     buffer_.insert(buffer_.end(), bytes, bytes + values.size() * sizeof(T));
   }
-  void PutString(const std::string& text) {
-    PutVector(std::vector<char>(text.begin(), text.end()));
-  }
   const std::vector<std::uint8_t>& bytes() const { return buffer_; }
 
  private:
@@ -58,10 +55,6 @@ class BinaryReader {
     std::memcpy(values.data(), payload_.data() + offset_, count * sizeof(T));
     offset_ += count * sizeof(T);
     return values;
-  }
-  std::string GetString() {
-    const std::vector<char> text = GetVector<char>();
-    return std::string(text.begin(), text.end());
   }
   // Throws unless every byte was read: a payload longer than its content is corrupt too.
   void ExpectEnd() const;

@@ -39,7 +39,6 @@ class StereoFrontEnd {
   void ApplyUpdate(const odometry::KeyframeUpdate& update) { tracker_.ApplyUpdate(update); }
   void Reset() { tracker_.Reset(); }
 
-  const camera::StereoRectifier& rectifier() const { return rectifier_; }
   const camera::StereoCamera& camera() const { return rectifier_.camera(); }
 
  private:

@@ -12,7 +12,6 @@ class PostingList {
  public:
   // Appending a larger id is O(1); a smaller one re-encodes the list.
   void Insert(std::uint32_t place);
-  bool Contains(std::uint32_t place) const;
   std::uint32_t size() const { return count_; }
   std::size_t bytes() const { return encoded_.capacity(); }
 

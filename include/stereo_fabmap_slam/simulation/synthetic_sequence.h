@@ -42,8 +42,6 @@ class SyntheticSequence {
   static constexpr std::int64_t kStartNs = 1'500'000'000'000'000'000;  // first image stamp
   static constexpr std::int64_t kFrameNs = 50'000'000;                 // 20 Hz
 
-  const HallScene& scene() const { return scene_; }
-  const Route& route() const { return route_; }
   int frame_count() const;
 
  private:
