@@ -22,14 +22,6 @@ void PlaceDatabase::Validate(const std::vector<int>& words) const {
   }
 }
 
-int PlaceDatabase::HitsOf(int place, int word) const {
-  const Place& p = places_[static_cast<std::size_t>(place)];
-  const auto position = std::lower_bound(p.words.begin(), p.words.end(), word);
-  return position != p.words.end() && *position == word
-             ? p.hits[static_cast<std::size_t>(position - p.words.begin())]
-             : 0;
-}
-
 int PlaceDatabase::AddPlace(const std::vector<int>& words) {
   Validate(words);
   const int index = size();
@@ -46,8 +38,11 @@ int PlaceDatabase::AddPlace(const std::vector<int>& words) {
 void PlaceDatabase::UpdatePlace(int index, const std::vector<int>& words) {
   Validate(words);
   Place& place = places_.at(static_cast<std::size_t>(index));
-  if (++place.observations == 2) ++observed_more_than_once_;
-  observations_[static_cast<std::size_t>(index)] = place.observations;
+  if (place.observations > 1) {
+    for (std::size_t i = 0; i < place.words.size(); ++i)
+      Ungroup(index, place.words[i], place.observations, place.hits[i]);
+  }
+  observations_[static_cast<std::size_t>(index)] = ++place.observations;
   for (const int word : words) {
     const auto position = std::lower_bound(place.words.begin(), place.words.end(), word);
     const std::size_t offset = static_cast<std::size_t>(position - place.words.begin());
@@ -56,16 +51,42 @@ void PlaceDatabase::UpdatePlace(int index, const std::vector<int>& words) {
     } else {
       place.words.insert(position, word);
       place.hits.insert(place.hits.begin() + static_cast<std::ptrdiff_t>(offset), 1);
+      Index(index, word);
     }
-    Index(index, word);
   }
+  for (std::size_t i = 0; i < place.words.size(); ++i)
+    Group(index, place.words[i], place.observations, place.hits[i]);
+}
+
+void PlaceDatabase::Group(int place, int word, int observations, int hits) {
+  std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
+  auto group = std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
+    return g.observations == observations && g.hits == hits;
+  });
+  if (group == groups.end()) group = groups.insert(groups.end(), {observations, hits, {}});
+  group->places.Insert(static_cast<std::uint32_t>(place));
+}
+
+void PlaceDatabase::Ungroup(int place, int word, int observations, int hits) {
+  std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
+  const auto group = std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
+    return g.observations == observations && g.hits == hits;
+  });
+  if (group == groups.end()) return;
+  group->places.Erase(static_cast<std::uint32_t>(place));
+  if (group->places.size() == 0) groups.erase(group);
 }
 
 std::size_t PlaceDatabase::MemoryBytes() const {
   std::size_t bytes = places_.capacity() * (sizeof(Place) + sizeof(std::int32_t)) +
-                      postings_.capacity() * sizeof(PostingList);
+                      postings_.capacity() * sizeof(PostingList) +
+                      repeated_.capacity() * sizeof(repeated_[0]);
   for (const Place& p : places_) bytes += p.words.capacity() * 4 + p.hits.capacity() * 2;
   for (const PostingList& list : postings_) bytes += list.bytes();
+  for (const std::vector<RepeatedGroup>& groups : repeated_) {
+    bytes += groups.capacity() * sizeof(RepeatedGroup);
+    for (const RepeatedGroup& group : groups) bytes += group.places.bytes();
+  }
   return bytes;
 }
 
@@ -98,12 +119,14 @@ PlaceDatabase PlaceDatabase::Load(const std::string& path) {
     } catch (const std::invalid_argument& error) {
       reader.Fail(error.what());
     }
+    const int index = database.size();
     for (std::size_t w = 0; w < place.words.size(); ++w) {
       if (place.hits[w] < 1 || place.hits[w] > place.observations) reader.Fail("bad hit count");
-      database.Index(static_cast<int>(database.places_.size()), place.words[w]);
+      database.Index(index, place.words[w]);
+      if (place.observations > 1)
+        database.Group(index, place.words[w], place.observations, place.hits[w]);
     }
     database.observations_.push_back(place.observations);
-    if (place.observations > 1) ++database.observed_more_than_once_;
     database.places_.push_back(std::move(place));
   }
   reader.ExpectEnd();

@@ -15,13 +15,22 @@ struct Place {
   std::vector<std::uint16_t> hits;  // observations that showed words[i]
 };
 
+// The places observed `observations` times that showed a word in `hits` of them: all change a
+// query's log-likelihood by the same amount for that word.
+struct RepeatedGroup {
+  std::int32_t observations;
+  std::int32_t hits;
+  PostingList places;
+};
+
 // Places with an inverted index (word -> places that showed it), so that a query visits only the
 // places sharing its words. Memory per place: its words (4 + 2 bytes each in the place, about 1
 // in the index), independent of the vocabulary size.
 class PlaceDatabase {
  public:
   explicit PlaceDatabase(int vocabulary_size = 0)
-      : postings_(static_cast<std::size_t>(vocabulary_size)) {}
+      : postings_(static_cast<std::size_t>(vocabulary_size)),
+        repeated_(static_cast<std::size_t>(vocabulary_size)) {}
 
   // `words`: sorted, distinct, below the vocabulary size (std::invalid_argument otherwise).
   int AddPlace(const std::vector<int>& words);
@@ -33,11 +42,13 @@ class PlaceDatabase {
   const PostingList& PlacesWith(int word) const {
     return postings_[static_cast<std::size_t>(word)];
   }
-  // Observations of `place` that showed `word` (0 if none).
-  int HitsOf(int place, int word) const;
-  // Observations per place, compact (the query's inner loop reads it per posting).
+  // Observations per place, compact.
   const std::vector<std::int32_t>& observations() const { return observations_; }
-  bool all_observed_once() const { return observed_more_than_once_ == 0; }
+  // The places observed more than once that showed `word`, by group. A query scores every place
+  // through PlacesWith() as if seen once, then corrects these, group by group.
+  const std::vector<RepeatedGroup>& RepeatedWith(int word) const {
+    return repeated_[static_cast<std::size_t>(word)];
+  }
   std::size_t MemoryBytes() const;  // of places and index, for the benchmark
 
   void Save(const std::string& path) const;
@@ -50,11 +61,14 @@ class PlaceDatabase {
   void Index(int place, int word) {
     postings_[static_cast<std::size_t>(word)].Insert(static_cast<std::uint32_t>(place));
   }
+  // Enters or removes a repeated place's word in its group.
+  void Group(int place, int word, int observations, int hits);
+  void Ungroup(int place, int word, int observations, int hits);
 
   std::vector<Place> places_;
   std::vector<std::int32_t> observations_;
-  int observed_more_than_once_ = 0;
-  std::vector<PostingList> postings_;  // per word
+  std::vector<PostingList> postings_;                 // per word: every place that showed it
+  std::vector<std::vector<RepeatedGroup>> repeated_;  // per word
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition
