@@ -234,12 +234,19 @@ std::vector<double> FabMap::LogLikelihoodsIndexed(const IndexedPlaces& places,
   }
 
   // Places observed more than once change the sum by their own amounts, not by `once`: one
-  // constant per affected word and group, added through the groups' own postings.
-  for (std::size_t k = 0; k < affected.size(); ++k) {
-    for (const RepeatedGroup& group : database.RepeatedWith(affected[k].word)) {
-      const double own = change(affected[k], group.hits, group.observations);
-      group.places.AddTo(static_cast<float>(own - once[k]), scores.data());
+  // constant per affected word and group, added through the groups' own postings into an array
+  // of the repeated places, then moved to their scores.
+  const std::vector<std::int32_t>& repeated = database.repeated_places();
+  if (!repeated.empty()) {
+    std::vector<float> corrections(repeated.size(), 0.0F);
+    for (std::size_t k = 0; k < affected.size(); ++k) {
+      for (const RepeatedGroup& group : database.RepeatedWith(affected[k].word)) {
+        const double own = change(affected[k], group.hits, group.observations);
+        group.ranks.AddTo(static_cast<float>(own - once[k]), corrections.data());
+      }
     }
+    for (std::size_t r = 0; r < repeated.size(); ++r)
+      scores[static_cast<std::size_t>(repeated[r])] += corrections[r];
   }
 
   // The part of the sum shared by all places observed equally often: computed once per distinct

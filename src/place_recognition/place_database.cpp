@@ -31,6 +31,7 @@ int PlaceDatabase::AddPlace(const std::vector<int>& words) {
   place.hits.assign(words.size(), 1);
   places_.push_back(std::move(place));
   observations_.push_back(1);
+  rank_.push_back(-1);
   for (const int word : words) Index(index, word);
   return index;
 }
@@ -38,9 +39,10 @@ int PlaceDatabase::AddPlace(const std::vector<int>& words) {
 void PlaceDatabase::UpdatePlace(int index, const std::vector<int>& words) {
   Validate(words);
   Place& place = places_.at(static_cast<std::size_t>(index));
+  const int rank = RankOf(index);
   if (place.observations > 1) {
     for (std::size_t i = 0; i < place.words.size(); ++i)
-      Ungroup(index, place.words[i], place.observations, place.hits[i]);
+      Ungroup(rank, place.words[i], place.observations, place.hits[i]);
   }
   observations_[static_cast<std::size_t>(index)] = ++place.observations;
   for (const int word : words) {
@@ -55,37 +57,47 @@ void PlaceDatabase::UpdatePlace(int index, const std::vector<int>& words) {
     }
   }
   for (std::size_t i = 0; i < place.words.size(); ++i)
-    Group(index, place.words[i], place.observations, place.hits[i]);
+    Group(rank, place.words[i], place.observations, place.hits[i]);
 }
 
-void PlaceDatabase::Group(int place, int word, int observations, int hits) {
+int PlaceDatabase::RankOf(int place) {
+  std::int32_t& rank = rank_[static_cast<std::size_t>(place)];
+  if (rank < 0) {
+    rank = static_cast<std::int32_t>(repeated_places_.size());
+    repeated_places_.push_back(place);
+  }
+  return rank;
+}
+
+void PlaceDatabase::Group(int rank, int word, int observations, int hits) {
   std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
   auto group = std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
     return g.observations == observations && g.hits == hits;
   });
   if (group == groups.end()) group = groups.insert(groups.end(), {observations, hits, {}});
-  group->places.Insert(static_cast<std::uint32_t>(place));
+  group->ranks.Insert(static_cast<std::uint32_t>(rank));
 }
 
-void PlaceDatabase::Ungroup(int place, int word, int observations, int hits) {
+void PlaceDatabase::Ungroup(int rank, int word, int observations, int hits) {
   std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
   const auto group = std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
     return g.observations == observations && g.hits == hits;
   });
   if (group == groups.end()) return;
-  group->places.Erase(static_cast<std::uint32_t>(place));
-  if (group->places.size() == 0) groups.erase(group);
+  group->ranks.Erase(static_cast<std::uint32_t>(rank));
+  if (group->ranks.size() == 0) groups.erase(group);
 }
 
 std::size_t PlaceDatabase::MemoryBytes() const {
   std::size_t bytes = places_.capacity() * (sizeof(Place) + sizeof(std::int32_t)) +
                       postings_.capacity() * sizeof(PostingList) +
-                      repeated_.capacity() * sizeof(repeated_[0]);
+                      repeated_.capacity() * sizeof(repeated_[0]) +
+                      (repeated_places_.capacity() + rank_.capacity()) * sizeof(std::int32_t);
   for (const Place& p : places_) bytes += p.words.capacity() * 4 + p.hits.capacity() * 2;
   for (const PostingList& list : postings_) bytes += list.bytes();
   for (const std::vector<RepeatedGroup>& groups : repeated_) {
     bytes += groups.capacity() * sizeof(RepeatedGroup);
-    for (const RepeatedGroup& group : groups) bytes += group.places.bytes();
+    for (const RepeatedGroup& group : groups) bytes += group.ranks.bytes();
   }
   return bytes;
 }
@@ -120,11 +132,12 @@ PlaceDatabase PlaceDatabase::Load(const std::string& path) {
       reader.Fail(error.what());
     }
     const int index = database.size();
+    database.rank_.push_back(-1);
+    const int rank = place.observations > 1 ? database.RankOf(index) : -1;
     for (std::size_t w = 0; w < place.words.size(); ++w) {
       if (place.hits[w] < 1 || place.hits[w] > place.observations) reader.Fail("bad hit count");
       database.Index(index, place.words[w]);
-      if (place.observations > 1)
-        database.Group(index, place.words[w], place.observations, place.hits[w]);
+      if (rank >= 0) database.Group(rank, place.words[w], place.observations, place.hits[w]);
     }
     database.observations_.push_back(place.observations);
     database.places_.push_back(std::move(place));

@@ -16,11 +16,13 @@ struct Place {
 };
 
 // The places observed `observations` times that showed a word in `hits` of them: all change a
-// query's log-likelihood by the same amount for that word.
+// query's log-likelihood by the same amount for that word. They are listed by their rank among
+// the repeated places (PlaceDatabase::repeated_places()): a query then adds its corrections
+// into a small array of repeated places, not all over the scores of the whole map.
 struct RepeatedGroup {
   std::int32_t observations;
   std::int32_t hits;
-  PostingList places;
+  PostingList ranks;
 };
 
 // Places with an inverted index (word -> places that showed it), so that a query visits only the
@@ -44,8 +46,10 @@ class PlaceDatabase {
   }
   // Observations per place, compact.
   const std::vector<std::int32_t>& observations() const { return observations_; }
-  // The places observed more than once that showed `word`, by group. A query scores every place
-  // through PlacesWith() as if seen once, then corrects these, group by group.
+  // The places observed more than once, in the order they became so (their rank).
+  const std::vector<std::int32_t>& repeated_places() const { return repeated_places_; }
+  // The repeated places that showed `word`, by group. A query scores every place through
+  // PlacesWith() as if seen once, then corrects these, group by group.
   const std::vector<RepeatedGroup>& RepeatedWith(int word) const {
     return repeated_[static_cast<std::size_t>(word)];
   }
@@ -61,14 +65,17 @@ class PlaceDatabase {
   void Index(int place, int word) {
     postings_[static_cast<std::size_t>(word)].Insert(static_cast<std::uint32_t>(place));
   }
-  // Enters or removes a repeated place's word in its group.
-  void Group(int place, int word, int observations, int hits);
-  void Ungroup(int place, int word, int observations, int hits);
+  // Enters or removes a repeated place's word in its group; `rank` as in repeated_places().
+  void Group(int rank, int word, int observations, int hits);
+  void Ungroup(int rank, int word, int observations, int hits);
+  int RankOf(int place);  // gives a place its rank when it becomes repeated
 
   std::vector<Place> places_;
   std::vector<std::int32_t> observations_;
   std::vector<PostingList> postings_;                 // per word: every place that showed it
   std::vector<std::vector<RepeatedGroup>> repeated_;  // per word
+  std::vector<std::int32_t> repeated_places_;         // by rank
+  std::vector<std::int32_t> rank_;                    // per place; -1 while seen once
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition
