@@ -260,7 +260,7 @@ TEST(FabMap, AddUpdatesAMatchedPlaceAndAddsANewOne) {
 }
 
 TEST(PostingList, KeepsPlacesInOrderAndAddsScoresOneOrTwoListsAtATime) {
-  // Every encoded length; out-of-order inserts, merged once they are an eighth of the list.
+  // Every encoded length; out-of-order inserts, merged once they are 1/64 of the list.
   // Gaps 0, 1, 127, 1, 2^14 - 1, 2^14, 2^21, 2^28, 1: 1, 1, 1, 1, 2, 3, 4, 5 and 1 bytes.
   const std::vector<std::uint32_t> a_places = {0,     1,       128,       129,      16512,
                                                32896, 2130048, 270565504, 270565505};

@@ -12,7 +12,7 @@ namespace stereo_fabmap_slam::place_recognition {
 class PostingList {
  public:
   // `place` must not be in the list yet. The largest id so far is appended in O(1); a smaller
-  // one joins the tail, which is merged once it holds an eighth of the list (amortised O(1)).
+  // one joins the tail, which is merged once it holds 1/64 of the list (amortised O(1)).
   void Insert(std::uint32_t place);
   // Removes `place` if present, in O(size()).
   void Erase(std::uint32_t place);
