@@ -69,20 +69,24 @@ int PlaceDatabase::RankOf(int place) {
   return rank;
 }
 
-void PlaceDatabase::Group(int rank, int word, int observations, int hits) {
+std::vector<RepeatedGroup>::iterator PlaceDatabase::FindGroup(int word, int observations,
+                                                              int hits) {
   std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
-  auto group = std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
+  return std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
     return g.observations == observations && g.hits == hits;
   });
+}
+
+void PlaceDatabase::Group(int rank, int word, int observations, int hits) {
+  std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
+  auto group = FindGroup(word, observations, hits);
   if (group == groups.end()) group = groups.insert(groups.end(), {observations, hits, {}});
   group->ranks.Insert(static_cast<std::uint32_t>(rank));
 }
 
 void PlaceDatabase::Ungroup(int rank, int word, int observations, int hits) {
   std::vector<RepeatedGroup>& groups = repeated_[static_cast<std::size_t>(word)];
-  const auto group = std::find_if(groups.begin(), groups.end(), [&](const RepeatedGroup& g) {
-    return g.observations == observations && g.hits == hits;
-  });
+  const auto group = FindGroup(word, observations, hits);
   if (group == groups.end()) return;
   group->ranks.Erase(static_cast<std::uint32_t>(rank));
   if (group->ranks.size() == 0) groups.erase(group);

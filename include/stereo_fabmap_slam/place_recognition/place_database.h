@@ -68,6 +68,7 @@ class PlaceDatabase {
   // Enters or removes a repeated place's word in its group; `rank` as in repeated_places().
   void Group(int rank, int word, int observations, int hits);
   void Ungroup(int rank, int word, int observations, int hits);
+  std::vector<RepeatedGroup>::iterator FindGroup(int word, int observations, int hits);
   int RankOf(int place);  // gives a place its rank when it becomes repeated
 
   std::vector<Place> places_;
