@@ -7,42 +7,17 @@
 
 #include <ceres/ceres.h>
 
-#include "stereo_fabmap_slam/backend/pose_parameters.h"
-#include "stereo_fabmap_slam/backend/reprojection_error.h"
+#include "stereo_fabmap_slam/geometry/chi_square.h"
+#include "stereo_fabmap_slam/geometry/pose_parameters.h"
+#include "stereo_fabmap_slam/geometry/reprojection_error.h"
 
 namespace stereo_fabmap_slam::backend {
-namespace {
-
-constexpr double kChiSquareMono = 5.991;
-constexpr double kChiSquareStereo = 7.815;
-
-}  // namespace
-
-void BundleAdjustmentOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("window", &window);
-  visitor.Visit("fixed_keyframes", &fixed_keyframes);
-  visitor.Visit("iterations", &iterations);
-  visitor.Visit("rounds", &rounds);
-  visitor.Visit("sigma", &sigma);
-  visitor.Visit("threads", &threads);
-}
-
-void BundleAdjustmentOptions::Validate() const {
-  if (window < 2) throw std::invalid_argument("backend.window must be >= 2");
-  if (fixed_keyframes < 1 || fixed_keyframes >= window) {
-    throw std::invalid_argument("backend.fixed_keyframes must lie in [1, window)");
-  }
-  if (iterations < 1 || rounds < 1 || threads < 1) {
-    throw std::invalid_argument("backend iterations, rounds and threads must be >= 1");
-  }
-  if (!(sigma > 0)) throw std::invalid_argument("backend.sigma must be > 0");
-}
 
 LocalBundleAdjuster::LocalBundleAdjuster(const BundleAdjustmentOptions& options,
-                                         const camera::StereoCamera& camera)
+                                         const geometry::StereoCamera& camera)
     : options_((options.Validate(), options)), camera_(camera) {}
 
-odometry::KeyframeUpdate LocalBundleAdjuster::AddKeyframe(const odometry::KeyframeData& data) {
+map::KeyframeUpdate LocalBundleAdjuster::AddKeyframe(const map::Keyframe& data, bool optimise) {
   if (data.starts_new_map) window_.clear();  // the old map is unrelated: no shared gauge
   Keyframe& keyframe = keyframes_[data.id];
   keyframe.T_world_camera = data.T_world_camera;
@@ -61,11 +36,11 @@ odometry::KeyframeUpdate LocalBundleAdjuster::AddKeyframe(const odometry::Keyfra
   }
   window_.push_back(data.id);
   while (static_cast<int>(window_.size()) > options_.window) window_.pop_front();
-  return Optimise();
+  return optimise ? Optimise() : map::KeyframeUpdate();
 }
 
-odometry::KeyframeUpdate LocalBundleAdjuster::Optimise() {
-  odometry::KeyframeUpdate update;
+map::KeyframeUpdate LocalBundleAdjuster::Optimise() {
+  map::KeyframeUpdate update;
   // Free keyframes: the window without its oldest. Points: those the window sees.
   const std::set<std::int64_t> window(window_.begin(), window_.end());
   std::set<std::int64_t> free_keyframes(
@@ -83,17 +58,17 @@ odometry::KeyframeUpdate LocalBundleAdjuster::Optimise() {
   }
   if (free_keyframes.empty() && point_ids.empty()) return update;
 
-  std::map<std::int64_t, PoseParameters> poses;
+  std::map<std::int64_t, geometry::PoseParameters> poses;
   for (const std::int64_t p : point_ids) {
     for (const Observation& o : points_[p].observations) {
       if (!poses.count(o.keyframe)) {
-        poses[o.keyframe] =
-            PoseParameters::FromTransform(keyframes_[o.keyframe].T_world_camera.inverse());
+        poses[o.keyframe] = geometry::PoseParameters::FromTransform(
+            keyframes_[o.keyframe].T_world_camera.inverse());
       }
     }
   }
 
-  ceres::HuberLoss loss(std::sqrt(kChiSquareStereo));
+  ceres::HuberLoss loss(std::sqrt(geometry::kChiSquare95ThreeDof));
   std::set<std::pair<std::int64_t, std::int64_t>> rejected;  // (point, keyframe)
   for (int round = 0; round < options_.rounds; ++round) {
     ceres::Problem::Options problem_options;
@@ -103,10 +78,10 @@ odometry::KeyframeUpdate LocalBundleAdjuster::Optimise() {
       Point& point = points_[p];
       for (const Observation& o : point.observations) {
         if (rejected.count({p, o.keyframe})) continue;
-        PoseParameters& pose = poses[o.keyframe];
+        geometry::PoseParameters& pose = poses[o.keyframe];
         problem.AddResidualBlock(
-            ReprojectionError::Create(camera_, o.u, o.v, o.u_right, options_.sigma), &loss,
-            pose.rotation, pose.translation, point.position.data());
+            geometry::ReprojectionError::Create(camera_, o.u, o.v, o.u_right, options_.sigma),
+            &loss, pose.rotation, pose.translation, point.position.data());
       }
     }
     for (auto& [id, pose] : poses) {
@@ -130,9 +105,10 @@ odometry::KeyframeUpdate LocalBundleAdjuster::Optimise() {
       const Point& point = points_[p];
       for (const Observation& o : point.observations) {
         const double chi2 =
-            SquaredReprojectionError(camera_, poses[o.keyframe].ToTransform(), point.position, o.u,
-                                     o.v, o.u_right, options_.sigma);
-        if (!(chi2 < (o.u_right >= 0 ? kChiSquareStereo : kChiSquareMono))) {
+            geometry::SquaredReprojectionError(camera_, poses[o.keyframe].ToTransform(),
+                                               point.position, o.u, o.v, o.u_right, options_.sigma);
+        if (!(chi2 <
+              (o.u_right >= 0 ? geometry::kChiSquare95ThreeDof : geometry::kChiSquare95TwoDof))) {
           rejected.insert({p, o.keyframe});
         }
       }

@@ -32,12 +32,6 @@ void CheckImage(const cv::Mat& image, const cv::Size& size, const char* side) {
 
 }  // namespace
 
-void RectificationOptions::Validate() const {
-  if (!(alpha >= 0.0 && alpha <= 1.0)) {
-    throw std::invalid_argument("rectification alpha must lie in [0, 1]");
-  }
-}
-
 StereoRectifier StereoRectifier::FromCalibration(const StereoCalibration& calibration,
                                                  const RectificationOptions& options) {
   calibration.Validate();

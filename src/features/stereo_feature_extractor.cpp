@@ -8,7 +8,7 @@ namespace stereo_fabmap_slam::features {
 
 StereoFeatureExtractor::StereoFeatureExtractor(const FeatureOptions& feature_options,
                                                const StereoMatcherOptions& stereo_options,
-                                               const camera::StereoCamera& camera)
+                                               const geometry::StereoCamera& camera)
     : options_((feature_options.Validate(), feature_options)),
       camera_(camera),
       left_detector_(feature_options, /*stereo_candidates=*/false),

@@ -9,40 +9,8 @@
 
 namespace stereo_fabmap_slam::features {
 
-void StereoMatcherOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("mode", &mode);
-  visitor.Visit("max_patch_distance", &max_patch_distance);
-  visitor.Visit("max_row_difference", &max_row_difference);
-  visitor.Visit("max_disparity", &max_disparity);
-  visitor.Visit("ratio", &ratio);
-  visitor.Visit("min_depth", &min_depth);
-  visitor.Visit("max_depth", &max_depth);
-  visitor.Visit("subpixel", &subpixel);
-  visitor.Visit("patch_radius", &patch_radius);
-  visitor.Visit("search_radius", &search_radius);
-}
-
-void StereoMatcherOptions::Validate() const {
-  if (mode != "patch" && mode != "descriptor") {
-    throw std::invalid_argument("stereo.mode must be 'patch' or 'descriptor', not '" + mode + "'");
-  }
-  if (!(max_patch_distance > 0 && max_patch_distance <= 2)) {
-    throw std::invalid_argument("stereo.max_patch_distance must lie in (0, 2]");
-  }
-  if (!(max_row_difference >= 0))
-    throw std::invalid_argument("stereo.max_row_difference must be >= 0");
-  if (!(max_disparity > 0)) throw std::invalid_argument("stereo.max_disparity must be > 0");
-  if (!(ratio > 0 && ratio <= 1)) throw std::invalid_argument("stereo.ratio must lie in (0, 1]");
-  if (!(min_depth > 0 && max_depth > min_depth)) {
-    throw std::invalid_argument("stereo depths need 0 < min_depth < max_depth");
-  }
-  if (patch_radius < 1 || search_radius < 1) {
-    throw std::invalid_argument("stereo.patch_radius and search_radius must be >= 1");
-  }
-}
-
 StereoMatcher::StereoMatcher(const StereoMatcherOptions& options,
-                             const camera::StereoCamera& camera, int norm,
+                             const geometry::StereoCamera& camera, int norm,
                              double max_descriptor_distance, bool parallel)
     : options_(options),
       camera_(camera),

@@ -10,15 +10,6 @@
 namespace stereo_fabmap_slam::geometry {
 namespace {
 
-struct KernelName {
-  const char* name;
-  PnpKernel kernel;
-};
-constexpr KernelName kKernels[] = {
-    {"ITERATIVE", PnpKernel::kIterative}, {"EPNP", PnpKernel::kEpnp},
-    {"AP3P", PnpKernel::kAp3p},           {"P3P", PnpKernel::kP3p},
-    {"SQPNP", PnpKernel::kSqpnp},         {"UMEYAMA", PnpKernel::kUmeyama}};
-
 int OpenCvFlag(PnpKernel kernel) {
   switch (kernel) {
     case PnpKernel::kIterative:
@@ -59,7 +50,7 @@ Eigen::Isometry3d FromOpenCv(const cv::Mat& rotation_vector, const cv::Mat& tran
 }
 
 double ReprojectionError(const PnpCorrespondence& c, const Eigen::Isometry3d& T_camera_world,
-                         const camera::StereoCamera& camera) {
+                         const geometry::StereoCamera& camera) {
   const Eigen::Vector3d p = T_camera_world * c.world;
   if (p.z() <= 1e-6) return std::numeric_limits<double>::infinity();
   return (Eigen::Vector2d(camera.fx * p.x() / p.z() + camera.cx,
@@ -70,7 +61,7 @@ double ReprojectionError(const PnpCorrespondence& c, const Eigen::Isometry3d& T_
 
 std::vector<int> Inliers(const std::vector<PnpCorrespondence>& correspondences,
                          const Eigen::Isometry3d& T_camera_world,
-                         const camera::StereoCamera& camera, double threshold) {
+                         const geometry::StereoCamera& camera, double threshold) {
   std::vector<int> inliers;
   for (int i = 0; i < static_cast<int>(correspondences.size()); ++i) {
     if (ReprojectionError(correspondences[i], T_camera_world, camera) <= threshold)
@@ -91,7 +82,7 @@ Eigen::Isometry3d FitRigid(const std::vector<PnpCorrespondence>& correspondences
 }
 
 PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
-                        const camera::StereoCamera& camera, const PnpRansacOptions& options) {
+                        const geometry::StereoCamera& camera, const PnpRansacOptions& options) {
   // Hypotheses from close points only (within 40 baselines, where stereo depth is reliable),
   // unless there are too few of them.
   std::vector<int> with_depth, close;
@@ -158,20 +149,20 @@ PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
 }  // namespace
 
 std::optional<PnpKernel> ParsePnpKernel(const std::string& name) {
-  for (const KernelName& k : kKernels) {
-    if (name == k.name) return k.kernel;
+  for (const auto& k : kPnpKernelNames) {
+    if (name == k.name) return k.value;
   }
   return std::nullopt;
 }
 
 std::string PnpKernelNames() {
   std::string names;
-  for (const KernelName& k : kKernels) names += (names.empty() ? "" : ", ") + std::string(k.name);
+  for (const auto& k : kPnpKernelNames) names += (names.empty() ? "" : ", ") + std::string(k.name);
   return names;
 }
 
 PnpResult SolvePnpRansac(const std::vector<PnpCorrespondence>& correspondences,
-                         const camera::StereoCamera& camera, const PnpRansacOptions& options,
+                         const geometry::StereoCamera& camera, const PnpRansacOptions& options,
                          const Eigen::Isometry3d& guess) {
   if (options.kernel == PnpKernel::kUmeyama) return UmeyamaRansac(correspondences, camera, options);
   PnpResult result;

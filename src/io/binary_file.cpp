@@ -5,7 +5,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/input_error.h"
 
 namespace stereo_fabmap_slam::io {
 

@@ -35,11 +35,6 @@ std::vector<std::string> Split(const std::string& line, Separator separator) {
 
 }  // namespace
 
-InputError FileError(const std::string& path, std::size_t line, const std::string& message) {
-  if (line == 0) return InputError(path + ": " + message);
-  return InputError(path + ":" + std::to_string(line) + ": " + message);
-}
-
 std::vector<TextRow> ReadDelimitedText(const std::string& path, Separator separator) {
   std::ifstream file(path);
   if (!file) throw FileError(path, 0, "cannot open file");

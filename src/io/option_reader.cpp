@@ -1,6 +1,6 @@
 #include "stereo_fabmap_slam/io/option_reader.h"
 
-#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/input_error.h"
 
 namespace stereo_fabmap_slam::io {
 

@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/input_error.h"
 
 namespace stereo_fabmap_slam::io {
 namespace {

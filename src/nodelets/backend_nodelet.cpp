@@ -4,16 +4,15 @@
 #include <deque>
 #include <memory>
 #include <mutex>
-#include <sstream>
 #include <thread>
 
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
-#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
 
 namespace stereo_fabmap_slam {
 
@@ -26,15 +25,16 @@ class BackendNodelet : public nodelet::Nodelet {
   void OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe);
   void Work();
 
-  static constexpr std::size_t kMaxQueued = 50;
-
   backend::BundleAdjustmentOptions options_;
   ros::Subscriber keyframe_subscriber_;
   ros::Publisher update_publisher_;
 
   std::mutex mutex_;
   std::condition_variable wake_;
-  std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;  // bounded by kMaxQueued
+  // Keyframes not yet adjusted. Never bounded by dropping: a keyframe missing from the map
+  // would leave a hole in the graph. Under load the worker adjusts the newest of them together
+  // and skips the optimisations in between (see Work()).
+  std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
   bool stopping_ = false;
   std::thread worker_;
 };
@@ -42,21 +42,12 @@ class BackendNodelet : public nodelet::Nodelet {
 void BackendNodelet::onInit() {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
   try {
-    std::string config_file;
-    if (private_node.getParam("config_file", config_file) && !config_file.empty()) {
-      options_ = pipeline::LoadPipelineOptions(config_file).backend;
-    }
-    ros_conversions::RosParameterReader reader(private_node, "backend");
-    options_.Visit(reader);
-    options_.Validate();
+    options_ = ros_parameters::ReadModuleOptions(private_node, options_);
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
-  std::ostringstream printed;
-  io::OptionPrinter printer(printed, "backend");
-  options_.Visit(printer);
-  NODELET_INFO_STREAM("options in force:\n" << printed.str());
+  NODELET_INFO_STREAM("options in force:\n" << ros_parameters::PrintedOptions(options_));
 
   update_publisher_ =
       getNodeHandle().advertise<stereo_fabmap_slam::KeyframeUpdate>("keyframe_updates", 100);
@@ -77,12 +68,6 @@ BackendNodelet::~BackendNodelet() {
 void BackendNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (queue_.size() >= kMaxQueued) {
-      // Never block the manager's callback thread: the oldest waiting keyframe gives way.
-      NODELET_WARN_THROTTLE(5, "bundle adjustment falls behind: keyframe %lu dropped",
-                            static_cast<unsigned long>(queue_.front()->id));
-      queue_.pop_front();
-    }
     queue_.push_back(keyframe);
   }
   wake_.notify_one();
@@ -91,26 +76,41 @@ void BackendNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyf
 void BackendNodelet::Work() {
   std::unique_ptr<backend::LocalBundleAdjuster> adjuster;
   while (true) {
-    stereo_fabmap_slam::KeyframeConstPtr message;
+    std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
       if (stopping_) return;
-      message = queue_.front();
-      queue_.pop_front();
+      waiting.swap(queue_);
     }
-    try {
-      if (!adjuster) {
-        adjuster = std::make_unique<backend::LocalBundleAdjuster>(
-            options_, ros_conversions::CameraOfKeyframe(*message));
+    if (waiting.size() > 1) {
+      NODELET_WARN_THROTTLE(5,
+                            "bundle adjustment falls behind: %zu keyframes added in one "
+                            "optimisation",
+                            waiting.size());
+    }
+    // Every keyframe enters the map; only the newest is followed by an optimisation, whose
+    // window covers the others.
+    while (!waiting.empty()) {
+      const stereo_fabmap_slam::KeyframeConstPtr message = waiting.front();
+      waiting.pop_front();
+      const bool optimise = waiting.empty();
+      try {
+        if (!adjuster) {
+          adjuster = std::make_unique<backend::LocalBundleAdjuster>(
+              options_, ros_conversions::CameraOfKeyframe(*message));
+        }
+        const map::KeyframeUpdate update =
+            adjuster->AddKeyframe(ros_conversions::FromKeyframeMessage(*message), optimise);
+        if (!optimise) continue;
+        stereo_fabmap_slam::KeyframeUpdate update_message =
+            ros_conversions::ToKeyframeUpdateMessage(update);
+        update_message.header = message->header;
+        update_publisher_.publish(update_message);
+      } catch (const std::exception& error) {
+        NODELET_WARN_THROTTLE(5, "keyframe %lu skipped: %s",
+                              static_cast<unsigned long>(message->id), error.what());
       }
-      stereo_fabmap_slam::KeyframeUpdate update = ros_conversions::ToKeyframeUpdateMessage(
-          adjuster->AddKeyframe(ros_conversions::FromKeyframeMessage(*message)));
-      update.header = message->header;
-      update_publisher_.publish(update);
-    } catch (const std::exception& error) {
-      NODELET_WARN_THROTTLE(5, "keyframe %lu skipped: %s", static_cast<unsigned long>(message->id),
-                            error.what());
     }
   }
 }

@@ -6,7 +6,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include <cv_bridge/cv_bridge.h>
@@ -23,6 +22,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
@@ -47,7 +47,8 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   void OnSingleImage(std::atomic<std::uint64_t>* count);
   void Publish(const ros::Time& stamp, const odometry::TrackingResult& result);
 
-  pipeline::PipelineOptions options_;
+  camera::RectificationOptions rectification_options_;
+  pipeline::FrontEndOptions options_;
   std::string odom_frame_, camera_frame_;
   std::mutex mutex_;  // image and update callbacks may run on different manager threads
   std::unique_ptr<pipeline::StereoFrontEnd> front_end_;
@@ -75,18 +76,14 @@ double SteadyMilliseconds() {
 void StereoTrackerNodelet::LoadOptions(const ros::NodeHandle& private_node) {
   // A configuration file first (config/euroc.yaml and its presets), then single private
   // parameters "~<section>/<key>" on top; a bad value stops start-up with its name.
-  std::string config_file;
-  if (private_node.getParam("config_file", config_file) && !config_file.empty()) {
-    options_ = pipeline::LoadPipelineOptions(config_file);
-  }
-  options_.ForEachSection([&](const std::string& section, auto& section_options) {
-    ros_conversions::RosParameterReader reader(private_node, section);
-    section_options.Visit(reader);
+  std::string printed;
+  rectification_options_ = ros_parameters::ReadModuleOptions(private_node, rectification_options_);
+  printed += ros_parameters::PrintedOptions(rectification_options_);
+  options_.ForEachModule([&](auto& options) {
+    options = ros_parameters::ReadModuleOptions(private_node, options);
+    printed += ros_parameters::PrintedOptions(options);
   });
-  options_.Validate();
-  std::ostringstream printed;
-  options_.Print(printed);
-  NODELET_INFO_STREAM("options in force:\n" << printed.str());
+  NODELET_INFO_STREAM("options in force:\n" << printed);
 }
 
 void StereoTrackerNodelet::onInit() {
@@ -115,7 +112,7 @@ void StereoTrackerNodelet::onInit() {
       const camera::StereoCalibration calibration =
           camera::ReadStereoCalibrationYaml(calibration_file);
       front_end_ = std::make_unique<pipeline::StereoFrontEnd>(
-          options_, camera::StereoRectifier::FromCalibration(calibration, options_.rectification),
+          options_, camera::StereoRectifier::FromCalibration(calibration, rectification_options_),
           SteadyMilliseconds);
     } catch (const std::exception& error) {
       NODELET_FATAL_STREAM("calibration: " << error.what());

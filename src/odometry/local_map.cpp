@@ -2,7 +2,7 @@
 
 namespace stereo_fabmap_slam::odometry {
 
-void LocalMap::AddKeyframe(const KeyframeData& keyframe) {
+void LocalMap::AddKeyframe(const map::Keyframe& keyframe) {
   LocalKeyframe local{keyframe.id, keyframe.T_world_camera, {}};
   for (std::size_t i = 0; i < keyframe.map_point_ids.size(); ++i) {
     const std::int64_t id = keyframe.map_point_ids[i];
@@ -27,7 +27,7 @@ void LocalMap::AddKeyframe(const KeyframeData& keyframe) {
   }
 }
 
-void LocalMap::ApplyUpdate(const KeyframeUpdate& update) {
+void LocalMap::ApplyUpdate(const map::KeyframeUpdate& update) {
   for (const auto& [id, pose] : update.keyframe_poses) {
     for (LocalKeyframe& keyframe : keyframes_) {
       if (keyframe.id == id) keyframe.T_world_camera = pose;

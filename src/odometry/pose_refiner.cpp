@@ -5,41 +5,23 @@
 
 #include <ceres/ceres.h>
 
-#include "stereo_fabmap_slam/backend/pose_parameters.h"
-#include "stereo_fabmap_slam/backend/reprojection_error.h"
+#include "stereo_fabmap_slam/geometry/chi_square.h"
+#include "stereo_fabmap_slam/geometry/pose_parameters.h"
+#include "stereo_fabmap_slam/geometry/reprojection_error.h"
 
 namespace stereo_fabmap_slam::odometry {
-namespace {
-
-constexpr double kChiSquareMono = 5.991;    // 95 %, 2 degrees of freedom
-constexpr double kChiSquareStereo = 7.815;  // 95 %, 3 degrees of freedom
-
-}  // namespace
-
-void PoseRefinementOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("sigma", &sigma);
-  visitor.Visit("rounds", &rounds);
-  visitor.Visit("iterations", &iterations);
-}
-
-void PoseRefinementOptions::Validate() const {
-  if (!(sigma > 0)) throw std::invalid_argument("pose refinement sigma must be > 0");
-  if (rounds < 1 || iterations < 1) {
-    throw std::invalid_argument("pose refinement rounds and iterations must be >= 1");
-  }
-}
 
 PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
-                          const camera::StereoCamera& camera, const Eigen::Isometry3d& initial,
+                          const geometry::StereoCamera& camera, const Eigen::Isometry3d& initial,
                           const PoseRefinementOptions& options,
                           const std::vector<bool>* initial_inliers) {
   PoseRefinement result;
   result.T_camera_world = initial;
   result.inlier =
       initial_inliers != nullptr ? *initial_inliers : std::vector<bool>(observations.size(), true);
-  ceres::HuberLoss loss(std::sqrt(kChiSquareStereo));
+  ceres::HuberLoss loss(std::sqrt(geometry::kChiSquare95ThreeDof));
   for (int round = 0; round < options.rounds; ++round) {
-    backend::PoseParameters pose = backend::PoseParameters::FromTransform(result.T_camera_world);
+    geometry::PoseParameters pose = geometry::PoseParameters::FromTransform(result.T_camera_world);
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
@@ -47,7 +29,7 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (!result.inlier[i]) continue;
       const PoseObservation& o = observations[i];
-      problem.AddResidualBlock(backend::FixedPointReprojectionError::Create(
+      problem.AddResidualBlock(geometry::FixedPointReprojectionError::Create(
                                    camera, o.world, o.u, o.v, o.u_right, options.sigma),
                                &loss, pose.rotation, pose.translation);
       ++residual_blocks;
@@ -67,9 +49,10 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
     result.inliers = 0;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const PoseObservation& o = observations[i];
-      const double chi2 = backend::SquaredReprojectionError(camera, result.T_camera_world, o.world,
-                                                            o.u, o.v, o.u_right, options.sigma);
-      result.inlier[i] = chi2 < (o.u_right >= 0 ? kChiSquareStereo : kChiSquareMono);
+      const double chi2 = geometry::SquaredReprojectionError(camera, result.T_camera_world, o.world,
+                                                             o.u, o.v, o.u_right, options.sigma);
+      result.inlier[i] =
+          chi2 < (o.u_right >= 0 ? geometry::kChiSquare95ThreeDof : geometry::kChiSquare95TwoDof);
       result.inliers += result.inlier[i] ? 1 : 0;
     }
   }

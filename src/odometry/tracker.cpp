@@ -63,46 +63,6 @@ double RotationDegrees(const Eigen::Isometry3d& motion) {
 
 }  // namespace
 
-void TrackerOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("search_radius", &search_radius);
-  visitor.Visit("search_radius_fine", &search_radius_fine);
-  visitor.Visit("match_ratio", &match_ratio);
-  visitor.Visit("pnp_kernel", &pnp_kernel);
-  visitor.Visit("ransac_threshold", &ransac_threshold);
-  visitor.Visit("ransac_iterations", &ransac_iterations);
-  visitor.Visit("min_inliers_ok", &min_inliers_ok);
-  visitor.Visit("min_inliers_weak", &min_inliers_weak);
-  visitor.Visit("min_map_points", &min_map_points);
-  visitor.Visit("local_keyframes", &local_keyframes);
-  visitor.Visit("parallel", &parallel);
-  visitor.Visit("refinement_sigma", &refinement.sigma);
-  visitor.Visit("refinement_rounds", &refinement.rounds);
-  visitor.Visit("refinement_iterations", &refinement.iterations);
-}
-
-void TrackerOptions::Validate() const {
-  if (!(search_radius > 0 && search_radius_fine > 0)) {
-    throw std::invalid_argument("tracker search radii must be > 0");
-  }
-  if (!(match_ratio > 0 && match_ratio <= 1)) {
-    throw std::invalid_argument("tracker.match_ratio must lie in (0, 1]");
-  }
-  if (!geometry::ParsePnpKernel(pnp_kernel)) {
-    throw std::invalid_argument("tracker.pnp_kernel '" + pnp_kernel +
-                                "' is unknown; available: " + geometry::PnpKernelNames());
-  }
-  if (!(ransac_threshold > 0) || ransac_iterations < 1) {
-    throw std::invalid_argument("tracker RANSAC threshold and iterations must be > 0");
-  }
-  if (min_inliers_weak < 6 || min_inliers_ok < min_inliers_weak) {
-    throw std::invalid_argument("tracker: need 6 <= min_inliers_weak <= min_inliers_ok");
-  }
-  if (min_map_points < 3 || local_keyframes < 1) {
-    throw std::invalid_argument("tracker: min_map_points >= 3 and local_keyframes >= 1");
-  }
-  refinement.Validate();
-}
-
 const char* TrackingStateName(TrackingState state) {
   switch (state) {
     case TrackingState::kOk:
@@ -116,7 +76,7 @@ const char* TrackingStateName(TrackingState state) {
 }
 
 Tracker::Tracker(const TrackerOptions& options, const KeyframePolicyOptions& keyframe_options,
-                 const camera::StereoCamera& camera, int descriptor_norm,
+                 const geometry::StereoCamera& camera, int descriptor_norm,
                  double max_descriptor_distance)
     : options_((options.Validate(), options)),
       keyframe_policy_(keyframe_options),
@@ -124,7 +84,7 @@ Tracker::Tracker(const TrackerOptions& options, const KeyframePolicyOptions& key
       descriptor_norm_(descriptor_norm),
       max_descriptor_distance_(max_descriptor_distance),
       local_map_(options.local_keyframes) {
-  ransac_options_.kernel = *geometry::ParsePnpKernel(options.pnp_kernel);
+  ransac_options_.kernel = options.pnp_kernel;
   ransac_options_.reprojection_threshold = options.ransac_threshold;
   ransac_options_.max_iterations = options.ransac_iterations;
 }
@@ -213,10 +173,10 @@ std::vector<PoseObservation> Tracker::Observations(const features::StereoFeature
   return observations;
 }
 
-KeyframeData Tracker::MakeKeyframe(double timestamp, features::StereoFeatures features,
-                                   const Eigen::Isometry3d& T_world_camera,
-                                   const std::vector<Match>& inlier_matches, bool starts_new_map) {
-  KeyframeData keyframe;
+map::Keyframe Tracker::MakeKeyframe(double timestamp, features::StereoFeatures features,
+                                    const Eigen::Isometry3d& T_world_camera,
+                                    const std::vector<Match>& inlier_matches, bool starts_new_map) {
+  map::Keyframe keyframe;
   keyframe.id = next_keyframe_id_++;
   keyframe.timestamp = timestamp;
   keyframe.T_world_camera = T_world_camera;
@@ -253,17 +213,23 @@ void Tracker::StartMap(double timestamp, features::StereoFeatures features,
   result->reason += (result->reason.empty() ? "" : "; ") + std::string("map started");
 }
 
-void Tracker::Remember(double timestamp, const Eigen::Isometry3d& T_world_camera,
-                       TrackingResult* result) {
+void Tracker::Remember(const Eigen::Isometry3d& T_world_camera, TrackingResult* result) {
   if (has_last_) velocity_ = last_T_world_camera_.inverse() * T_world_camera;
   has_last_ = true;
-  last_timestamp_ = timestamp;
   last_T_world_camera_ = T_world_camera;
   result->T_world_camera = T_world_camera;
   if (!local_map_.empty()) {
     result->reference_keyframe = local_map_.last_keyframe_id();
     result->T_keyframe_camera = last_keyframe_pose_.inverse() * T_world_camera;
   }
+}
+
+TrackingResult Tracker::StartOver(double timestamp, features::StereoFeatures features,
+                                  const Eigen::Isometry3d& predicted, TrackingResult result) {
+  StartMap(timestamp, std::move(features), predicted, &result);
+  if (!result.keyframe) result.state = TrackingState::kLost;
+  Remember(predicted, &result);
+  return result;
 }
 
 TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features) {
@@ -273,10 +239,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
 
   if (local_map_.empty()) {
     result.state = TrackingState::kOk;
-    StartMap(timestamp, std::move(features), predicted, &result);
-    if (!result.keyframe) result.state = TrackingState::kLost;
-    Remember(timestamp, predicted, &result);
-    return result;
+    return StartOver(timestamp, std::move(features), predicted, std::move(result));
   }
 
   // Coarse search around the predicted pose (wider if that finds too little), RANSAC, refine.
@@ -301,9 +264,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
     result.state = TrackingState::kLost;
     result.reason = "only " + std::to_string(ransac.inliers.size()) + " RANSAC inliers of " +
                     std::to_string(matches.size()) + " matches";
-    StartMap(timestamp, std::move(features), predicted, &result);
-    Remember(timestamp, predicted, &result);
-    return result;
+    return StartOver(timestamp, std::move(features), predicted, std::move(result));
   }
   // The RANSAC pose is already re-fitted to its whole consensus set (by OpenCV, or by the
   // Umeyama kernel): good enough to search again with a fine radius, which finds the points
@@ -323,9 +284,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   if (result.inliers < options_.min_inliers_weak) {
     result.state = TrackingState::kLost;
     result.reason = "only " + std::to_string(result.inliers) + " inliers after refinement";
-    StartMap(timestamp, std::move(features), predicted, &result);
-    Remember(timestamp, predicted, &result);
-    return result;
+    return StartOver(timestamp, std::move(features), predicted, std::move(result));
   }
   result.state =
       result.inliers < options_.min_inliers_ok ? TrackingState::kWeak : TrackingState::kOk;
@@ -350,11 +309,11 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
         MakeKeyframe(timestamp, std::move(features), T_world_camera, inlier_matches, false);
     result.reason += (result.reason.empty() ? "" : "; ") + ("keyframe: " + decision.reason);
   }
-  Remember(timestamp, T_world_camera, &result);
+  Remember(T_world_camera, &result);
   return result;
 }
 
-void Tracker::ApplyUpdate(const KeyframeUpdate& update) {
+void Tracker::ApplyUpdate(const map::KeyframeUpdate& update) {
   if (local_map_.empty()) return;
   const std::int64_t last_id = local_map_.last_keyframe_id();
   local_map_.ApplyUpdate(update);

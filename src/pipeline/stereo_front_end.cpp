@@ -2,7 +2,7 @@
 
 namespace stereo_fabmap_slam::pipeline {
 
-StereoFrontEnd::StereoFrontEnd(const PipelineOptions& options, camera::StereoRectifier rectifier,
+StereoFrontEnd::StereoFrontEnd(const FrontEndOptions& options, camera::StereoRectifier rectifier,
                                Clock clock)
     : rectifier_(std::move(rectifier)),
       clock_(std::move(clock)),

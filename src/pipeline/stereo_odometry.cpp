@@ -2,11 +2,12 @@
 
 namespace stereo_fabmap_slam::pipeline {
 
-StereoOdometry::StereoOdometry(const PipelineOptions& options,
+StereoOdometry::StereoOdometry(const FrontEndOptions& front_end_options,
+                               const backend::BundleAdjustmentOptions& bundle_adjustment_options,
                                const camera::StereoRectifier& rectifier, Clock clock)
     : clock_(clock),
-      front_end_(options, rectifier, clock),
-      bundle_adjuster_(options.backend, rectifier.camera()) {}
+      front_end_(front_end_options, rectifier, clock),
+      bundle_adjuster_(bundle_adjustment_options, rectifier.camera()) {}
 
 const FrameRecord& StereoOdometry::ProcessFrame(double timestamp, const cv::Mat& left_raw,
                                                 const cv::Mat& right_raw) {

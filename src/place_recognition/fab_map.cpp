@@ -17,40 +17,6 @@ double LogSumExp(const std::vector<double>& values) {
 
 }  // namespace
 
-void FabMapOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("p_z_given_e", &p_z_given_e);
-  visitor.Visit("p_z_given_not_e", &p_z_given_not_e);
-  visitor.Visit("new_place_prior", &new_place_prior);
-  visitor.Visit("smoothing", &smoothing);
-  visitor.Visit("new_place_model", &new_place_model);
-  visitor.Visit("location_prior", &location_prior);
-  visitor.Visit("motion_weight", &motion_weight);
-  visitor.Visit("inverted_index", &inverted_index);
-  visitor.Visit("exact_tree_corrections", &exact_tree_corrections);
-  visitor.Visit("match_threshold", &match_threshold);
-}
-
-void FabMapOptions::Validate() const {
-  if (!(p_z_given_e > 0 && p_z_given_e < 1) ||
-      !(p_z_given_not_e >= 0 && p_z_given_not_e < p_z_given_e)) {
-    throw std::invalid_argument("fabmap: need 0 <= p_z_given_not_e < p_z_given_e < 1");
-  }
-  if (!(new_place_prior > 0 && new_place_prior < 1))
-    throw std::invalid_argument("fabmap.new_place_prior must lie in (0, 1)");
-  if (!(smoothing > 0 && smoothing <= 1))
-    throw std::invalid_argument("fabmap.smoothing must lie in (0, 1]");
-  if (new_place_model != "mean_field" && new_place_model != "sampling") {
-    throw std::invalid_argument("fabmap.new_place_model must be mean_field or sampling");
-  }
-  if (location_prior != "uniform" && location_prior != "motion") {
-    throw std::invalid_argument("fabmap.location_prior must be uniform or motion");
-  }
-  if (!(motion_weight >= 0 && motion_weight <= 1))
-    throw std::invalid_argument("fabmap.motion_weight must lie in [0, 1]");
-  if (!(match_threshold > 0 && match_threshold <= 1))
-    throw std::invalid_argument("fabmap.match_threshold must lie in (0, 1]");
-}
-
 FabMapModel::FabMapModel(ChowLiuTree tree, double p_z_given_e, double p_z_given_not_e)
     : tree_(std::move(tree)), p_z_given_e_(p_z_given_e), p_z_given_not_e_(p_z_given_not_e) {
   const int v = tree_.size();
@@ -113,7 +79,7 @@ FabMap::FabMap(ChowLiuTree tree, const FabMapOptions& options, PlaceDatabase tra
       samples_.database.vocabulary_size() != model_.size()) {
     throw std::invalid_argument("training places and Chow-Liu tree have different vocabularies");
   }
-  if (options_.new_place_model == "sampling" && samples_.database.size() == 0) {
+  if (options_.new_place_model == NewPlaceModel::kSampling && samples_.database.size() == 0) {
     throw std::invalid_argument("the sampling new-place model needs training places");
   }
   Reindex(&samples_);
@@ -284,7 +250,7 @@ std::vector<double> FabMap::LogLikelihoods(const IndexedPlaces& places, const Qu
 }
 
 double FabMap::NewPlaceLogLikelihood(const Query& query) const {
-  if (options_.new_place_model == "sampling") {
+  if (options_.new_place_model == NewPlaceModel::kSampling) {
     // The average likelihood of the training images taken as places.
     std::vector<double> samples = LogLikelihoods(samples_, query);
     return LogSumExp(samples) - std::log(static_cast<double>(samples.size()));
@@ -314,7 +280,7 @@ FabMapResult FabMap::Compare(const std::vector<int>& words) const {
   // neighbours differ from the rest, so the logarithm is taken once for the others.
   const double existing = 1 - options_.new_place_prior;
   std::vector<double> log_joint(result.log_likelihoods);
-  if (options_.location_prior == "motion" && last_match_ >= 0) {
+  if (options_.location_prior == LocationPrior::kMotion && last_match_ >= 0) {
     const int first = std::max(0, last_match_ - 1), last = std::min(n - 1, last_match_ + 1);
     const double spread = existing * (1 - options_.motion_weight) / n;
     const double near = spread + existing * options_.motion_weight / (last - first + 1);

@@ -1,59 +1,84 @@
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
-#include <filesystem>
 #include <stdexcept>
 
-#include "stereo_fabmap_slam/io/csv_reader.h"
-#include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_fabmap_slam/io/options_file.h"
 
 namespace stereo_fabmap_slam::place_recognition {
+
+void VocabularyOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("branching", &branching);
+  visitor.Visit("depth", &depth);
+  visitor.Visit("iterations", &iterations);
+  visitor.Visit("seed", &seed);
+}
+
+void VocabularyOptions::Validate() const {
+  if (branching < 2 || depth < 1 || iterations < 1) {
+    throw std::invalid_argument("vocabulary: branching >= 2, depth >= 1, iterations >= 1");
+  }
+  double words = 1;
+  for (int i = 0; i < depth; ++i) words *= branching;
+  if (words > 1e7)
+    throw std::invalid_argument("vocabulary: branching^depth must not exceed 10^7 words");
+}
+
+void FabMapOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("p_z_given_e", &p_z_given_e);
+  visitor.Visit("p_z_given_not_e", &p_z_given_not_e);
+  visitor.Visit("new_place_prior", &new_place_prior);
+  visitor.Visit("smoothing", &smoothing);
+  static constexpr io::EnumName<NewPlaceModel> kNewPlaceModels[] = {
+      {NewPlaceModel::kMeanField, "mean_field"}, {NewPlaceModel::kSampling, "sampling"}};
+  static constexpr io::EnumName<LocationPrior> kLocationPriors[] = {
+      {LocationPrior::kUniform, "uniform"}, {LocationPrior::kMotion, "motion"}};
+  io::VisitEnum(visitor, "new_place_model", &new_place_model, kNewPlaceModels);
+  io::VisitEnum(visitor, "location_prior", &location_prior, kLocationPriors);
+  visitor.Visit("motion_weight", &motion_weight);
+  visitor.Visit("inverted_index", &inverted_index);
+  visitor.Visit("exact_tree_corrections", &exact_tree_corrections);
+  visitor.Visit("match_threshold", &match_threshold);
+}
+
+void FabMapOptions::Validate() const {
+  if (!(p_z_given_e > 0 && p_z_given_e < 1) ||
+      !(p_z_given_not_e >= 0 && p_z_given_not_e < p_z_given_e)) {
+    throw std::invalid_argument("fabmap: need 0 <= p_z_given_not_e < p_z_given_e < 1");
+  }
+  if (!(new_place_prior > 0 && new_place_prior < 1))
+    throw std::invalid_argument("fabmap.new_place_prior must lie in (0, 1)");
+  if (!(smoothing > 0 && smoothing <= 1))
+    throw std::invalid_argument("fabmap.smoothing must lie in (0, 1]");
+  if (!(motion_weight >= 0 && motion_weight <= 1))
+    throw std::invalid_argument("fabmap.motion_weight must lie in [0, 1]");
+  if (!(match_threshold > 0 && match_threshold <= 1))
+    throw std::invalid_argument("fabmap.match_threshold must lie in (0, 1]");
+}
+
+void TrainingOptions::Validate() const {
+  if (spacing < 1) throw std::invalid_argument("training.spacing must be >= 1");
+}
 
 void PlaceRecognitionOptions::Validate() const {
   features.Validate();
   vocabulary.Validate();
   fabmap.Validate();
-  if (training_spacing < 1) throw std::invalid_argument("training.spacing must be >= 1");
+  training.Validate();
 }
 
 PlaceRecognitionOptions LoadPlaceRecognitionOptions(
     const std::string& path, const features::FeatureOptions& odometry_features) {
-  const io::YamlFile file = io::YamlFile::Load(path);
+  const io::OptionsFile file = io::OptionsFile::Load(path);
+  file.RejectUnknownSections({"vocabulary_directory", features::FeatureOptions::kSection,
+                              VocabularyOptions::kSection, FabMapOptions::kSection,
+                              TrainingOptions::kSection});
   PlaceRecognitionOptions options;
-  options.features = odometry_features;
-  const auto section = [&](const char* name, auto& target) {
-    const YAML::Node node = file.Has(file.root(), name) ? file.root()[name] : YAML::Node();
-    io::YamlOptionReader reader(file, node, name);
-    target.Visit(reader);
-    reader.RejectUnknownKeys();
-  };
-  section("features", options.features);
-  section("vocabulary", options.vocabulary);
-  section("fabmap", options.fabmap);
-  struct Training {
-    int* spacing;
-    void Visit(io::OptionVisitor& visitor) { visitor.Visit("spacing", spacing); }
-  } training{&options.training_spacing};
-  section("training", training);
-  for (const auto& entry : file.root()) {
-    const std::string key = entry.first.as<std::string>();
-    if (key != "vocabulary_directory" && key != "features" && key != "vocabulary" &&
-        key != "fabmap" && key != "training") {
-      throw io::FileError(path, entry.first.Mark().line + 1, "unknown section '" + key + "'");
-    }
-  }
-  if (file.Has(file.root(), "vocabulary_directory")) {
-    const std::filesystem::path directory = file.String(file.root(), "vocabulary_directory");
-    options.vocabulary_directory =
-        (directory.is_absolute() ? directory
-                                 : std::filesystem::path(path).parent_path() / directory)
-            .lexically_normal()
-            .string();
-  }
-  try {
-    options.Validate();
-  } catch (const std::invalid_argument& error) {
-    throw io::FileError(path, 0, error.what());
-  }
+  options.features = file.Read(odometry_features);
+  options.vocabulary = file.Read<VocabularyOptions>();
+  options.fabmap = file.Read<FabMapOptions>();
+  options.training = file.Read<TrainingOptions>();
+  options.vocabulary_directory = file.Path("vocabulary_directory").value_or("");
   return options;
 }
 

@@ -116,23 +116,6 @@ std::vector<int> Cluster(const cv::Mat& data, const std::vector<int>& members, i
 
 }  // namespace
 
-void VocabularyOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("branching", &branching);
-  visitor.Visit("depth", &depth);
-  visitor.Visit("iterations", &iterations);
-  visitor.Visit("seed", &seed);
-}
-
-void VocabularyOptions::Validate() const {
-  if (branching < 2 || depth < 1 || iterations < 1) {
-    throw std::invalid_argument("vocabulary: branching >= 2, depth >= 1, iterations >= 1");
-  }
-  double words = 1;
-  for (int i = 0; i < depth; ++i) words *= branching;
-  if (words > 1e7)
-    throw std::invalid_argument("vocabulary: branching^depth must not exceed 10^7 words");
-}
-
 Vocabulary Vocabulary::Train(const cv::Mat& descriptors, const VocabularyOptions& options) {
   options.Validate();
   if (descriptors.empty() || (descriptors.type() != CV_8U && descriptors.type() != CV_32F)) {

@@ -7,7 +7,7 @@
 
 #include "command_line.h"
 #include "euroc_bag_writer.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 
 namespace {
 
@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const io::EurocSequence sequence = io::EurocSequence::Open(args->positional()[0]);
-    for (const io::UnpairedImage& image : sequence.unpaired()) {
+    const datasets::EurocSequence sequence = datasets::EurocSequence::Open(args->positional()[0]);
+    for (const datasets::UnpairedImage& image : sequence.unpaired()) {
       std::fprintf(stderr, "euroc_to_bag: warning: %s image %s has no partner, skipped\n",
                    image.camera.c_str(), image.path.c_str());
     }

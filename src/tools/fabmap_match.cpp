@@ -12,8 +12,8 @@
 
 #include "command_line.h"
 #include "image_sources.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
-#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/io/options_file.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -57,9 +57,9 @@ int main(int argc, char** argv) {
     place_recognition::PlaceRecognitionOptions options =
         place_recognition::LoadPlaceRecognitionOptions(
             args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
-            pipeline::LoadPipelineOptions(
+            io::OptionsFile::Load(
                 args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml"))
-                .features);
+                .Read<features::FeatureOptions>());
     const std::string vocabulary_file =
         args->ValueOr("vocabulary", options.vocabulary_directory + "/vocabulary.bin");
     const std::string directory = fs::path(vocabulary_file).parent_path().string();
@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
     const place_recognition::Vocabulary vocabulary =
         place_recognition::Vocabulary::Load(vocabulary_file);
     place_recognition::FabMapOptions fabmap_options = options.fabmap;
-    if (args->Flag("sampling")) fabmap_options.new_place_model = "sampling";
+    if (args->Flag("sampling"))
+      fabmap_options.new_place_model = place_recognition::NewPlaceModel::kSampling;
     place_recognition::FabMap fabmap(
         place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), fabmap_options,
         place_recognition::PlaceDatabase::Load(directory + "/training_places.bin"));

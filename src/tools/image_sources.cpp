@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 
 namespace stereo_fabmap_slam::tools {
 
@@ -13,7 +13,7 @@ std::vector<ImageSource> ListImages(const std::string& source, int every) {
   std::vector<ImageSource> images;
   const std::size_t step = static_cast<std::size_t>(std::max(every, 1));
   if (fs::is_directory(source + "/mav0") || fs::is_directory(source + "/cam0")) {
-    const io::EurocSequence sequence = io::EurocSequence::Open(source);
+    const datasets::EurocSequence sequence = datasets::EurocSequence::Open(source);
     for (std::size_t i = 0; i < sequence.size(); i += step) {
       images.push_back({sequence.frames()[i].left_path, sequence.frames()[i].timestamp_ns * 1e-9});
     }

@@ -6,8 +6,8 @@
 
 #include "command_line.h"
 #include "euroc_bag_writer.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
-#include "stereo_fabmap_slam/simulation/synthetic_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 
 namespace {
 
@@ -29,7 +29,7 @@ constexpr char kUsage[] =
 
 int main(int argc, char** argv) {
   std::optional<tools::CommandLine> args;
-  simulation::SyntheticSequenceOptions options;
+  datasets::SyntheticSequenceOptions options;
   std::string out;
   try {
     args.emplace(argc, argv,
@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const simulation::SyntheticSequence sequence(options);
+    const datasets::SyntheticSequence sequence(options);
     std::printf("rendering %s: route %s, %.1f s, %d frames, seed %llu\n", out.c_str(),
                 options.route.c_str(), options.seconds, sequence.frame_count(),
                 static_cast<unsigned long long>(options.seed));
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "  %d / %d frames\n", frame, frames);
     });
     if (!args->Flag("no-bag")) {
-      ros_conversions::WriteEurocBag(io::EurocSequence::Open(out), out + "/sequence.bag");
+      ros_conversions::WriteEurocBag(datasets::EurocSequence::Open(out), out + "/sequence.bag");
       std::printf("wrote %s/sequence.bag\n", out.c_str());
     }
   } catch (const std::exception& error) {

@@ -14,9 +14,10 @@
 #include <vector>
 
 #include "command_line.h"
+#include "slam_configuration.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
 #include "stereo_fabmap_slam/pipeline/stereo_odometry.h"
 
 namespace {
@@ -106,8 +107,8 @@ int main(int argc, char** argv) {
     const std::string output = args->ValueOr("output", "output/" + name);
     const bool quiet = args->Flag("quiet");
 
-    const pipeline::PipelineOptions options = pipeline::LoadPipelineOptions(config);
-    const io::EurocSequence sequence = io::EurocSequence::Open(asl);
+    const tools::SlamConfiguration options = tools::SlamConfiguration::Load(config);
+    const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
     const camera::StereoRectifier rectifier =
         camera::StereoRectifier::FromCalibration(sequence.calibration(), options.rectification);
     if (!quiet) {
@@ -115,18 +116,19 @@ int main(int argc, char** argv) {
       options.Print(std::cout);
       std::cout << "sequence " << asl << ": " << sequence.size() << " stereo pairs\n";
     }
-    for (const io::UnpairedImage& image : sequence.unpaired()) {
+    for (const datasets::UnpairedImage& image : sequence.unpaired()) {
       std::fprintf(stderr, "warning: %s image %s has no partner, skipped\n", image.camera.c_str(),
                    image.path.c_str());
     }
     std::filesystem::create_directories(output);
 
-    pipeline::StereoOdometry odometry(options, rectifier, NowMs);
+    pipeline::StereoOdometry odometry(options.front_end, options.bundle_adjustment, rectifier,
+                                      NowMs);
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
     for (std::size_t i = 0; i < sequence.size(); ++i) {
-      const io::StereoImages images = sequence.LoadStereoPair(i);
+      const datasets::StereoImages images = sequence.LoadStereoPair(i);
       const double start = NowMs();
       const pipeline::FrameRecord& frame =
           odometry.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);

@@ -13,8 +13,8 @@
 
 #include "command_line.h"
 #include "image_sources.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
-#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/io/options_file.h"
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 #include "stereo_fabmap_slam/place_recognition/place_database.h"
@@ -61,8 +61,8 @@ int main(int argc, char** argv) {
     place_recognition::PlaceRecognitionOptions options =
         place_recognition::LoadPlaceRecognitionOptions(
             args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
-            pipeline::LoadPipelineOptions(config).features);
-    const int spacing = static_cast<int>(args->NumberOr("spacing", options.training_spacing));
+            io::OptionsFile::Load(config).Read<features::FeatureOptions>());
+    const int spacing = static_cast<int>(args->NumberOr("spacing", options.training.spacing));
     place_recognition::VocabularyOptions& vocabulary_options = options.vocabulary;
     vocabulary_options.branching =
         static_cast<int>(args->NumberOr("branching", vocabulary_options.branching));

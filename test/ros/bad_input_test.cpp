@@ -14,7 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -23,7 +23,7 @@ namespace {
 class BadInputTest : public ::testing::Test {
  protected:
   BadInputTest()
-      : sequence_(io::EurocSequence::Open(EurocSequencePath("V101_micro"))),
+      : sequence_(datasets::EurocSequence::Open(EurocSequencePath("V101_micro"))),
         left_(node_.advertise<sensor_msgs::Image>("/cam0/image_raw", 10)),
         right_(node_.advertise<sensor_msgs::Image>("/cam1/image_raw", 10)),
         odometry_(node_.subscribe<nav_msgs::Odometry>(
@@ -61,7 +61,7 @@ class BadInputTest : public ::testing::Test {
   }
 
   void SendReal(std::size_t frame, std::int64_t stamp_ns) {
-    const io::StereoImages images = sequence_.LoadStereoPair(frame);
+    const datasets::StereoImages images = sequence_.LoadStereoPair(frame);
     Send(images.left, images.right, sensor_msgs::image_encodings::MONO8, stamp_ns);
   }
 
@@ -70,7 +70,7 @@ class BadInputTest : public ::testing::Test {
     return stamps_.count(stamp_ns) > 0;
   }
 
-  io::EurocSequence sequence_;
+  datasets::EurocSequence sequence_;
   ros::NodeHandle node_;
   ros::Publisher left_, right_;
   ros::Subscriber odometry_;
@@ -87,7 +87,7 @@ TEST_F(BadInputTest, WarnsSkipsAndKeepsTracking) {
   EXPECT_TRUE(HasOdometry(t - step)) << "real frames must be tracked";
 
   // Colour: converted to mono8 and tracked.
-  const io::StereoImages frame5 = sequence_.LoadStereoPair(5);
+  const datasets::StereoImages frame5 = sequence_.LoadStereoPair(5);
   cv::Mat left_bgr, right_bgr;
   cv::cvtColor(frame5.left, left_bgr, cv::COLOR_GRAY2BGR);
   cv::cvtColor(frame5.right, right_bgr, cv::COLOR_GRAY2BGR);

@@ -12,7 +12,7 @@
 #include <sensor_msgs/Image.h>
 
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -36,7 +36,7 @@ class StampRecorder {
 
 TEST(BagPlayback, EveryImageArrivesInOrder) {
   const std::string asl = EurocSequencePath("V101_micro");
-  const io::EurocSequence sequence = io::EurocSequence::Open(asl);
+  const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
   TemporaryDirectory temp;
   const std::string bag = temp.path() + "/v101.bag";
   std::string output;
@@ -65,7 +65,7 @@ TEST(BagPlayback, EveryImageArrivesInOrder) {
   spinner.stop();
 
   std::vector<std::int64_t> expected;
-  for (const io::StereoFrameEntry& frame : sequence.frames())
+  for (const datasets::StereoFrameEntry& frame : sequence.frames())
     expected.push_back(frame.timestamp_ns);
   EXPECT_EQ(left.stamps(), expected);
   EXPECT_EQ(right.stamps(), expected);

@@ -4,12 +4,12 @@
 
 #include <gtest/gtest.h>
 
-#include "stereo_fabmap_slam/backend/reprojection_error.h"
+#include "stereo_fabmap_slam/geometry/reprojection_error.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
-const camera::StereoCamera kCamera{cv::Size(752, 480), 435.0, 435.0, 367.0, 248.0, 0.11};
+const geometry::StereoCamera kCamera{cv::Size(752, 480), 435.0, 435.0, 367.0, 248.0, 0.11};
 
 Eigen::Isometry3d Pose(double yaw, const Eigen::Vector3d& position) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -24,7 +24,7 @@ Eigen::Isometry3d Pose(double yaw, const Eigen::Vector3d& position) {
 struct Problem {
   std::vector<Eigen::Isometry3d> true_poses;
   std::vector<Eigen::Vector3d> true_points;
-  std::vector<odometry::KeyframeData> keyframes;
+  std::vector<map::Keyframe> keyframes;
 };
 
 Problem MakeProblem() {
@@ -42,7 +42,7 @@ Problem MakeProblem() {
     problem.true_poses.push_back(truth);
     const Eigen::Isometry3d estimate =
         k == 0 ? truth : truth * Pose(0.015 * (k % 2 ? 1 : -1), {0.03, -0.02 * k / 5.0, 0.04});
-    odometry::KeyframeData keyframe;
+    map::Keyframe keyframe;
     keyframe.id = k;
     keyframe.timestamp = k;
     keyframe.T_world_camera = estimate;
@@ -72,11 +72,11 @@ double RmsReprojection(const Problem& problem,
                        const std::map<std::int64_t, Eigen::Vector3d>& points) {
   double sum = 0;
   int n = 0;
-  for (const odometry::KeyframeData& k : problem.keyframes) {
+  for (const map::Keyframe& k : problem.keyframes) {
     for (std::size_t i = 0; i < k.map_point_ids.size(); ++i) {
       const auto point = points.find(k.map_point_ids[i]);
       if (point == points.end()) continue;
-      sum += backend::SquaredReprojectionError(
+      sum += geometry::SquaredReprojectionError(
           kCamera, poses.at(k.id).inverse(), point->second, k.features.keypoints[i].pt.x,
           k.features.keypoints[i].pt.y, k.features.u_right[i], 1.0);
       ++n;
@@ -94,14 +94,14 @@ TEST(LocalBundleAdjuster, RecoversPerturbedPosesAndReducesTheError) {
   // The error before optimisation: the perturbed poses and points as handed over.
   std::map<std::int64_t, Eigen::Isometry3d> initial_poses;
   std::map<std::int64_t, Eigen::Vector3d> initial_points, points;
-  for (const odometry::KeyframeData& k : problem.keyframes) {
+  for (const map::Keyframe& k : problem.keyframes) {
     initial_poses[k.id] = k.T_world_camera;
     for (std::size_t i = 0; i < k.map_point_ids.size(); ++i) {
       initial_points.emplace(k.map_point_ids[i], k.T_world_camera * k.features.points[i]);
     }
   }
-  for (const odometry::KeyframeData& k : problem.keyframes) {
-    const odometry::KeyframeUpdate update = adjuster.AddKeyframe(k);
+  for (const map::Keyframe& k : problem.keyframes) {
+    const map::KeyframeUpdate update = adjuster.AddKeyframe(k);
     for (const auto& [id, position] : update.point_positions) points[id] = position;
   }
   for (const auto& [id, position] : initial_points) points.emplace(id, position);
@@ -138,7 +138,7 @@ TEST(LocalBundleAdjuster, RemovesGrossOutliers) {
   // Corrupt one observation badly in keyframe 3: it must be rejected, not bend the solution.
   problem.keyframes[3].features.keypoints[5].pt.x += 40.0f;
   backend::LocalBundleAdjuster adjuster(backend::BundleAdjustmentOptions{}, kCamera);
-  for (const odometry::KeyframeData& k : problem.keyframes) adjuster.AddKeyframe(k);
+  for (const map::Keyframe& k : problem.keyframes) adjuster.AddKeyframe(k);
   const auto poses = adjuster.KeyframePoses();
   EXPECT_LT((poses.at(3).translation() - problem.true_poses[3].translation()).norm(), 0.01);
 }

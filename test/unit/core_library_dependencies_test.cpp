@@ -42,6 +42,17 @@ TEST(CoreLibraryDependencies, PatternRecognisesRosLibraries) {
   EXPECT_TRUE(std::regex_search(LinkedLibraries(nodelets), kRosLibrary));
 }
 
+TEST(CoreLibraryDependencies, NodeletsLinkNoDatasets) {
+  // The EuRoC reader and the synthetic world are inputs for tools and tests: a robot running the
+  // nodelets loads neither.
+  const std::string nodelets = std::filesystem::path(STEREO_FABMAP_SLAM_CORE_LIBRARY)
+                                   .replace_filename("libstereo_fabmap_slam_nodelets.so")
+                                   .string();
+  const std::string linked = LinkedLibraries(nodelets);
+  ASSERT_NE(linked.find("libstereo_fabmap_slam_core"), std::string::npos) << linked;
+  EXPECT_EQ(linked.find("libstereo_fabmap_slam_datasets"), std::string::npos) << linked;
+}
+
 TEST(CoreLibraryDependencies, CoreSourcesIncludeNoRosHeader) {
   const std::regex ros_include(
       R"(#\s*include\s*[<"](ros/|rosbag/|nodelet/|pluginlib/|cv_bridge/|tf2|image_transport/|)"
@@ -52,8 +63,9 @@ TEST(CoreLibraryDependencies, CoreSourcesIncludeNoRosHeader) {
     for (const auto& entry : std::filesystem::recursive_directory_iterator(root + "/" + folder)) {
       const std::string path = entry.path().string();
       if (!entry.is_regular_file()) continue;
-      // ROS lives in the nodelets and the tools only.
+      // ROS lives in the nodelets, the ROS helper library and the tools only.
       if (path.find("/src/nodelets/") != std::string::npos ||
+          path.find("/src/ros/") != std::string::npos ||
           path.find("/src/tools/") != std::string::npos) {
         continue;
       }

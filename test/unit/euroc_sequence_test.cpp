@@ -1,4 +1,4 @@
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 
 #include <filesystem>
 #include <string>
@@ -6,14 +6,14 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/input_error.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
 namespace fs = std::filesystem;
-using io::EurocSequence;
+using datasets::EurocSequence;
 using io::InputError;
 
 // Expects `action` to throw InputError whose message contains every one of `parts`.
@@ -48,7 +48,7 @@ TEST(EurocSequence, ReadsMh01Subset) {
   // EuRoC's stereo baseline is about 11 cm.
   EXPECT_NEAR(calibration.T_right_left().translation().norm(), 0.110, 0.002);
 
-  const io::StereoImages images = sequence.LoadStereoPair(199);
+  const datasets::StereoImages images = sequence.LoadStereoPair(199);
   EXPECT_EQ(images.left.size(), cv::Size(752, 480));
   EXPECT_EQ(images.right.type(), CV_8UC1);
   EXPECT_EQ(images.timestamp_ns, sequence.frames().back().timestamp_ns);
@@ -60,7 +60,7 @@ TEST(EurocSequence, ReadsV101WithYamlHeaderAndLateGroundTruth) {
   ASSERT_TRUE(sequence.has_ground_truth());
   const double first_truth = sequence.ground_truth().front().timestamp;
   int frames_before_truth = 0;
-  for (const io::StereoFrameEntry& frame : sequence.frames()) {
+  for (const datasets::StereoFrameEntry& frame : sequence.frames()) {
     if (frame.timestamp_ns * 1e-9 < first_truth) ++frames_before_truth;
   }
   EXPECT_EQ(frames_before_truth, 21);  // as the data README says
@@ -78,7 +78,7 @@ class BrokenEurocTest : public ::testing::Test {
       fs::copy_file(source + "/" + camera + "/sensor.yaml", mav0_ + "/" + camera + "/sensor.yaml");
       std::string list = "#timestamp [ns],filename\n";
       for (int i = 0; i < 3; ++i) {
-        const io::StereoFrameEntry& frame = original.frames()[i];
+        const datasets::StereoFrameEntry& frame = original.frames()[i];
         const std::string name = std::to_string(frame.timestamp_ns) + ".png";
         fs::copy_file(camera == "cam0" ? frame.left_path : frame.right_path,
                       mav0_ + "/" + camera + "/data/" + name);

@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -17,7 +17,7 @@ namespace {
 
 TEST(EurocToBag, V101MicroReadsBackFrameForFrame) {
   const std::string asl = EurocSequencePath("V101_micro");
-  const io::EurocSequence sequence = io::EurocSequence::Open(asl);
+  const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
   TemporaryDirectory temp;
   const std::string bag_path = temp.path() + "/v101.bag";
   std::string output;
@@ -43,12 +43,12 @@ TEST(EurocToBag, V101MicroReadsBackFrameForFrame) {
     ASSERT_TRUE(image);
     const std::size_t index = images[side]++;
     ASSERT_LT(index, sequence.size());
-    const io::StereoFrameEntry& frame = sequence.frames()[index];
+    const datasets::StereoFrameEntry& frame = sequence.frames()[index];
     EXPECT_EQ(ros_conversions::ToNanoseconds(image->header.stamp), frame.timestamp_ns);
     EXPECT_EQ(ros_conversions::ToNanoseconds(instance.getTime()), frame.timestamp_ns);
     EXPECT_EQ(image->header.frame_id, side == 0 ? "cam0" : "cam1");
     EXPECT_EQ(image->encoding, "mono8");
-    const io::StereoImages expected = sequence.LoadStereoPair(index);
+    const datasets::StereoImages expected = sequence.LoadStereoPair(index);
     const cv::Mat& pixels = side == 0 ? expected.left : expected.right;
     const cv::Mat stored(static_cast<int>(image->height), static_cast<int>(image->width), CV_8UC1,
                          const_cast<std::uint8_t*>(image->data.data()), image->step);

@@ -6,9 +6,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -32,11 +32,11 @@ class EvaluateTrajectoryTool : public ::testing::Test {
     sensor_yaml_ = mav0 + "/cam0/sensor.yaml";
     // An "estimate": the left camera's true path at the ground-truth stamps nearest the images,
     // 20 cm off, which SE(3) alignment removes exactly.
-    const io::EurocSequence sequence = io::EurocSequence::Open(mav0);
+    const datasets::EurocSequence sequence = datasets::EurocSequence::Open(mav0);
     const evaluation::Trajectory camera_truth = evaluation::TransformToSensorFrame(
         sequence.ground_truth(), sequence.calibration().left.T_body_camera);
     std::size_t k = 0;
-    for (const io::StereoFrameEntry& frame : sequence.frames()) {
+    for (const datasets::StereoFrameEntry& frame : sequence.frames()) {
       const double t = frame.timestamp_ns * 1e-9;
       while (k + 1 < camera_truth.size() && camera_truth[k + 1].timestamp <= t) ++k;
       evaluation::StampedPose pose = camera_truth[k];

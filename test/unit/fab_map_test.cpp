@@ -10,9 +10,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
 
-#include "stereo_fabmap_slam/io/csv_reader.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
-#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_fabmap_slam/io/options_file.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -124,7 +124,7 @@ std::vector<double> HandTheta(const ChowLiuTree& tree, const FabMapOptions& o,
   return theta;
 }
 
-class ToyFabMap : public ::testing::TestWithParam<std::tuple<std::string, bool>> {};
+class ToyFabMap : public ::testing::TestWithParam<std::tuple<NewPlaceModel, bool>> {};
 
 TEST_P(ToyFabMap, PosteriorMatchesTheFormulas) {
   const ChowLiuTree tree = ToyTree();
@@ -149,7 +149,7 @@ TEST_P(ToyFabMap, PosteriorMatchesTheFormulas) {
                         std::log((1 - options.new_place_prior) / 3));
   }
   double new_place;
-  if (options.new_place_model == "mean_field") {
+  if (options.new_place_model == NewPlaceModel::kMeanField) {
     std::vector<double> prior;
     for (int q = 0; q < 6; ++q) prior.push_back(tree.Marginal(q));
     new_place = HandLogLikelihood(tree, options, query, prior);
@@ -181,7 +181,8 @@ TEST_P(ToyFabMap, PosteriorMatchesTheFormulas) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ModelsAndVersions, ToyFabMap,
-                         ::testing::Combine(::testing::Values("mean_field", "sampling"),
+                         ::testing::Combine(::testing::Values(NewPlaceModel::kMeanField,
+                                                              NewPlaceModel::kSampling),
                                             ::testing::Bool()));
 
 TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
@@ -310,7 +311,7 @@ TEST(FabMap, MotionPriorFavoursTheLastMatchAndItsNeighbours) {
   const std::vector<int> query(mixed.begin(), mixed.end());
   for (const double weight : {0.6, 1.0}) {
     FabMapOptions options;
-    options.location_prior = "motion";
+    options.location_prior = LocationPrior::kMotion;
     options.motion_weight = weight;
     FabMap fabmap(tree, options);
     int place = -1;
@@ -352,17 +353,20 @@ class RealImages : public ::testing::Test {
 TEST_F(RealImages, KnownPlacesMatchAndAnotherBuildingIsNew) {
   const std::string directory = STEREO_FABMAP_SLAM_DEFAULT_VOCABULARY;
   // The shipped configuration: odometry features with place recognition's selection.
-  const PlaceRecognitionOptions options = LoadPlaceRecognitionOptions(
-      RepositoryRoot() + "/config/fabmap.yaml",
-      pipeline::LoadPipelineOptions(RepositoryRoot() + "/config/euroc.yaml").features);
+  const PlaceRecognitionOptions options =
+      LoadPlaceRecognitionOptions(RepositoryRoot() + "/config/fabmap.yaml",
+                                  io::OptionsFile::Load(RepositoryRoot() + "/config/euroc.yaml")
+                                      .Read<features::FeatureOptions>());
   EXPECT_EQ(std::filesystem::canonical(options.vocabulary_directory),
             std::filesystem::canonical(directory));
   const Vocabulary vocabulary = Vocabulary::Load(directory + "/vocabulary.bin");
   FabMap fabmap(ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), options.fabmap);
   ImageDescriber describer{options.features};
-  const io::EurocSequence mh01 = io::EurocSequence::Open(EurocSequencePath("MH01_first10s"));
-  const io::EurocSequence v101 = io::EurocSequence::Open(EurocSequencePath("V101_micro"));
-  const auto words = [&](const io::EurocSequence& sequence, std::size_t frame) {
+  const datasets::EurocSequence mh01 =
+      datasets::EurocSequence::Open(EurocSequencePath("MH01_first10s"));
+  const datasets::EurocSequence v101 =
+      datasets::EurocSequence::Open(EurocSequencePath("V101_micro"));
+  const auto words = [&](const datasets::EurocSequence& sequence, std::size_t frame) {
     return vocabulary.WordSet(describer.Describe(sequence.LoadStereoPair(frame).left));
   };
   // The map: every 10th frame of MH01 as its own place.

@@ -7,11 +7,11 @@
 #include <opencv2/calib3d.hpp>
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/features/adaptive_detector.h"
 #include "stereo_fabmap_slam/features/anms.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -22,13 +22,13 @@ using namespace features;  // NOLINT: the module under test
 class RealStereoPair : public ::testing::Test {
  protected:
   RealStereoPair()
-      : sequence_(io::EurocSequence::Open(EurocSequencePath("MH01_first10s"))),
+      : sequence_(datasets::EurocSequence::Open(EurocSequencePath("MH01_first10s"))),
         rectifier_(camera::StereoRectifier::FromCalibration(sequence_.calibration())) {
-    const io::StereoImages raw = sequence_.LoadStereoPair(100);
+    const datasets::StereoImages raw = sequence_.LoadStereoPair(100);
     rectifier_.Rectify(raw.left, raw.right, &left_, &right_);
   }
 
-  io::EurocSequence sequence_;
+  datasets::EurocSequence sequence_;
   camera::StereoRectifier rectifier_;
   cv::Mat left_, right_;
 };
@@ -90,7 +90,7 @@ TEST_F(RealStereoPair, TriangulatedDepthsAgreeWithDisparity) {
   StereoFeatureExtractor extractor(FeatureOptions{}, StereoMatcherOptions{}, rectifier_.camera());
   const StereoFeatures features = extractor.Extract(left_, right_);
   ASSERT_GT(features.CountWithDepth(), 150);
-  const camera::StereoCamera& camera = rectifier_.camera();
+  const geometry::StereoCamera& camera = rectifier_.camera();
   std::vector<double> depths;
   for (std::size_t i = 0; i < features.size(); ++i) {
     if (!features.HasDepth(i)) continue;
@@ -126,7 +126,7 @@ TEST_F(RealStereoPair, PatchAndDescriptorStereoMatchingAgree) {
   FeatureOptions options;
   options.adaptive_threshold = false;
   StereoMatcherOptions patch, descriptor;
-  descriptor.mode = "descriptor";
+  descriptor.mode = StereoMatchMode::kDescriptor;
   StereoFeatureExtractor by_patch(options, patch, rectifier_.camera());
   StereoFeatureExtractor by_descriptor(options, descriptor, rectifier_.camera());
   const StereoFeatures a = by_patch.Extract(left_, right_);

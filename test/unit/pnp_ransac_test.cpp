@@ -16,7 +16,7 @@ struct Scene {
   Eigen::Isometry3d T_camera_world;
 };
 
-const camera::StereoCamera kCamera{cv::Size(752, 480), 435.0, 435.0, 367.0, 248.0, 0.11};
+const geometry::StereoCamera kCamera{cv::Size(752, 480), 435.0, 435.0, 367.0, 248.0, 0.11};
 
 // 300 points 2-12 m in front of a known camera, seen with 0.5 px noise; 30 % of the
 // correspondences replaced by random pixels (and random stereo points).

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -42,7 +42,8 @@ TEST(RosConversions, Mono8ImageCopiesPixels) {
 }
 
 TEST(RosConversions, CameraInfoPairGivesTheSameRectification) {
-  const io::EurocSequence sequence = io::EurocSequence::Open(EurocSequencePath("V101_micro"));
+  const datasets::EurocSequence sequence =
+      datasets::EurocSequence::Open(EurocSequencePath("V101_micro"));
   const camera::StereoRectifier from_yaml =
       camera::StereoRectifier::FromCalibration(sequence.calibration());
   const sensor_msgs::CameraInfo left = ToCameraInfo(from_yaml.left_parameters(), "cam0");
@@ -55,7 +56,7 @@ TEST(RosConversions, CameraInfoPairGivesTheSameRectification) {
   EXPECT_DOUBLE_EQ(from_info.camera().baseline, from_yaml.camera().baseline);
   EXPECT_TRUE(from_info.T_body_rectified_left().isApprox(from_yaml.T_body_rectified_left(), 1e-12));
   // Same maps: the same rectified pixels.
-  const io::StereoImages raw = sequence.LoadStereoPair(10);
+  const datasets::StereoImages raw = sequence.LoadStereoPair(10);
   cv::Mat l1, r1, l2, r2;
   from_yaml.Rectify(raw.left, raw.right, &l1, &r1);
   from_info.Rectify(raw.left, raw.right, &l2, &r2);
@@ -65,6 +66,80 @@ TEST(RosConversions, CameraInfoPairGivesTheSameRectification) {
   sensor_msgs::CameraInfo fisheye = left;
   fisheye.distortion_model = "equidistant";
   EXPECT_THROW(FromCameraInfo(fisheye), std::invalid_argument);
+}
+
+map::Keyframe ExampleKeyframe() {
+  map::Keyframe keyframe;
+  keyframe.id = 41;
+  keyframe.timestamp = 1403636584.763555584;
+  keyframe.T_world_camera.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
+  keyframe.T_world_camera.translation() = Eigen::Vector3d(2.0, -1.0, 0.5);
+  keyframe.starts_new_map = true;
+  features::StereoFeatures& f = keyframe.features;
+  for (int i = 0; i < 5; ++i) {
+    f.keypoints.emplace_back(10.5f + 100 * i, 20.25f + 50 * i, 7.0f);
+    f.u_right.push_back(i == 2 ? -1.0f : 5.5f + 100 * i);
+    f.points.emplace_back(0.1 * i, -0.2 * i, 1.0 + i);
+    keyframe.map_point_ids.push_back(i == 2 ? -1 : 1000 + i);
+  }
+  f.descriptors = cv::Mat(5, 64, CV_8U);
+  cv::randu(f.descriptors, 0, 256);
+  return keyframe;
+}
+
+TEST(RosConversions, KeyframeRoundTrip) {
+  const map::Keyframe keyframe = ExampleKeyframe();
+  const geometry::StereoCamera camera{cv::Size(752, 480), 458.0, 457.0, 367.0, 248.0, 0.11};
+  const stereo_fabmap_slam::Keyframe message = ToKeyframeMessage(keyframe, camera, "odom");
+  EXPECT_EQ(message.header.frame_id, "odom");
+  const map::Keyframe back = FromKeyframeMessage(message);
+  EXPECT_EQ(back.id, keyframe.id);
+  EXPECT_NEAR(back.timestamp, keyframe.timestamp, 1e-6);  // ROS time holds nanoseconds
+  EXPECT_TRUE(back.T_world_camera.isApprox(keyframe.T_world_camera, 1e-12));
+  EXPECT_EQ(back.starts_new_map, keyframe.starts_new_map);
+  ASSERT_EQ(back.features.size(), keyframe.features.size());
+  for (std::size_t i = 0; i < keyframe.features.size(); ++i) {
+    EXPECT_EQ(back.features.keypoints[i].pt, keyframe.features.keypoints[i].pt);
+    EXPECT_EQ(back.features.u_right[i], keyframe.features.u_right[i]);
+    // Points travel as float32: within a micrometre at these ranges.
+    EXPECT_LT((back.features.points[i] - keyframe.features.points[i]).norm(), 1e-6);
+  }
+  EXPECT_EQ(back.map_point_ids, keyframe.map_point_ids);
+  EXPECT_EQ(cv::norm(back.features.descriptors, keyframe.features.descriptors, cv::NORM_L1), 0);
+  const geometry::StereoCamera camera_back = CameraOfKeyframe(message);
+  EXPECT_EQ(camera_back.size, camera.size);
+  EXPECT_EQ(camera_back.fx, camera.fx);
+  EXPECT_EQ(camera_back.baseline, camera.baseline);
+}
+
+TEST(RosConversions, KeyframeWithInconsistentArraysIsRefused) {
+  const geometry::StereoCamera camera{cv::Size(752, 480), 458.0, 457.0, 367.0, 248.0, 0.11};
+  stereo_fabmap_slam::Keyframe message = ToKeyframeMessage(ExampleKeyframe(), camera, "odom");
+  message.v.pop_back();
+  EXPECT_THROW(FromKeyframeMessage(message), std::invalid_argument);
+}
+
+TEST(RosConversions, KeyframeUpdateRoundTrip) {
+  map::KeyframeUpdate update;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(0.5, 0.25, -3.0);
+  update.keyframe_poses.emplace_back(7, pose);
+  update.keyframe_poses.emplace_back(8, Eigen::Isometry3d::Identity());
+  update.point_positions.emplace_back(123456789012, Eigen::Vector3d(1.0, 2.0, 3.0));
+  update.removed_points = {5, 6};
+  const map::KeyframeUpdate back = FromKeyframeUpdateMessage(ToKeyframeUpdateMessage(update));
+  ASSERT_EQ(back.keyframe_poses.size(), 2u);
+  EXPECT_EQ(back.keyframe_poses[0].first, 7);
+  EXPECT_TRUE(back.keyframe_poses[0].second.isApprox(pose, 1e-12));
+  ASSERT_EQ(back.point_positions.size(), 1u);
+  EXPECT_EQ(back.point_positions[0].first, 123456789012);
+  EXPECT_EQ(back.point_positions[0].second, Eigen::Vector3d(1.0, 2.0, 3.0));
+  EXPECT_EQ(back.removed_points, update.removed_points);
+
+  stereo_fabmap_slam::KeyframeUpdate broken = ToKeyframeUpdateMessage(update);
+  broken.keyframe_ids.pop_back();
+  EXPECT_THROW(FromKeyframeUpdateMessage(broken), std::invalid_argument);
 }
 
 }  // namespace

@@ -8,7 +8,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -47,15 +47,15 @@ double Median(std::vector<double> values) {
 class RectificationOnEuroc : public ::testing::Test {
  protected:
   RectificationOnEuroc()
-      : sequence_(io::EurocSequence::Open(EurocSequencePath("MH01_first10s"))),
+      : sequence_(datasets::EurocSequence::Open(EurocSequencePath("MH01_first10s"))),
         rectifier_(StereoRectifier::FromCalibration(sequence_.calibration())) {}
 
-  io::EurocSequence sequence_;
+  datasets::EurocSequence sequence_;
   StereoRectifier rectifier_;
 };
 
 TEST_F(RectificationOnEuroc, RectifiedModelIsPlausible) {
-  const camera::StereoCamera& camera = rectifier_.camera();
+  const geometry::StereoCamera& camera = rectifier_.camera();
   EXPECT_EQ(camera.size, cv::Size(752, 480));
   EXPECT_NEAR(camera.baseline, 0.110, 0.002);
   // alpha = 0 crops away the distorted border, so the focal length shrinks a little.
@@ -77,7 +77,7 @@ TEST_F(RectificationOnEuroc, MatchesLieOnTheSameRowWithPositiveDepth) {
   std::vector<double> rectified_dy, raw_dy;
   int epipolar_matches = 0, positive_depth = 0;
   for (const std::size_t frame : {0u, 50u, 100u, 150u, 199u}) {
-    const io::StereoImages raw = sequence_.LoadStereoPair(frame);
+    const datasets::StereoImages raw = sequence_.LoadStereoPair(frame);
     cv::Mat left, right;
     rectifier_.Rectify(raw.left, raw.right, &left, &right);
     for (const StereoMatch& m : CrossCheckedMatches(left, right)) {
@@ -130,7 +130,7 @@ TEST_F(RectificationOnEuroc, RejectsImagesOfTheWrongSizeOrType) {
 }
 
 TEST(StereoCamera, ProjectAndTriangulateAreInverse) {
-  camera::StereoCamera camera{cv::Size(752, 480), 435.0, 435.0, 370.0, 250.0, 0.11};
+  geometry::StereoCamera camera{cv::Size(752, 480), 435.0, 435.0, 370.0, 250.0, 0.11};
   const Eigen::Vector3d point(0.4, -0.3, 3.5);
   const Eigen::Vector3d pixels = camera.Project(point);
   EXPECT_NEAR(pixels.x() - pixels.z(), 435.0 * 0.11 / 3.5, 1e-12);

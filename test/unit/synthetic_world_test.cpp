@@ -8,17 +8,17 @@
 #include <opencv2/imgproc.hpp>
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/datasets/camera_renderer.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
-#include "stereo_fabmap_slam/io/euroc_sequence.h"
 #include "stereo_fabmap_slam/pipeline/stereo_odometry.h"
-#include "stereo_fabmap_slam/simulation/camera_renderer.h"
-#include "stereo_fabmap_slam/simulation/synthetic_sequence.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
-using namespace simulation;  // NOLINT: the module under test
+using namespace datasets;  // NOLINT: the module under test
 
 // A dark room whose +x wall (x = 10, spanning y in [0, 10], z in [0, 5]) shows a 3 x 3 grid of
 // white discs; returns the scene and the discs' world positions.
@@ -139,7 +139,7 @@ TEST(SyntheticWorld, RectifiedDisparityMatchesDepth) {
                                  in_right = BlobCentroids(right_float);
   ASSERT_EQ(in_left.size(), discs.size());
   const Eigen::Isometry3d T_rectified_world = (body * rectifier.T_body_rectified_left()).inverse();
-  const camera::StereoCamera& camera = rectifier.camera();
+  const geometry::StereoCamera& camera = rectifier.camera();
   for (const Eigen::Vector3d& disc : discs) {
     const Eigen::Vector3d c = T_rectified_world * disc;
     const Eigen::Vector3d expected = camera.Project(c);
@@ -182,7 +182,7 @@ TEST(SyntheticWorld, SameSeedSameBytesAndReadableOutput) {
   EXPECT_NE(FileBytes(temp.path() + "/a" + first), FileBytes(temp.path() + "/c" + first));
 
   // The package's own reader takes it, calibration and ground truth included.
-  const io::EurocSequence sequence = io::EurocSequence::Open(temp.path() + "/a");
+  const datasets::EurocSequence sequence = datasets::EurocSequence::Open(temp.path() + "/a");
   EXPECT_EQ(sequence.size(), 10u);
   EXPECT_TRUE(sequence.unpaired().empty());
   const camera::StereoCalibration rig = SyntheticSequence::Rig(true);
@@ -212,9 +212,9 @@ TEST(SyntheticWorld, ExposureAndMotionBlurChangeTheImages) {
   options.exposure_changes = false;
   options.motion_blur = true;
   SyntheticSequence(options).Write(temp.path() + "/blur");
-  const io::EurocSequence plain = io::EurocSequence::Open(temp.path() + "/plain");
-  const io::EurocSequence exposure = io::EurocSequence::Open(temp.path() + "/exposure");
-  const io::EurocSequence blur = io::EurocSequence::Open(temp.path() + "/blur");
+  const datasets::EurocSequence plain = datasets::EurocSequence::Open(temp.path() + "/plain");
+  const datasets::EurocSequence exposure = datasets::EurocSequence::Open(temp.path() + "/exposure");
+  const datasets::EurocSequence blur = datasets::EurocSequence::Open(temp.path() + "/blur");
   const std::size_t last = plain.size() - 1;
   const cv::Mat a = plain.LoadStereoPair(last).left, b = exposure.LoadStereoPair(last).left;
   EXPECT_GT(cv::mean(b)[0], 1.1 * cv::mean(a)[0]);  // brighter by the gain
@@ -253,13 +253,14 @@ TEST(SyntheticWorld, OdometryOnARenderedLoop) {
   SyntheticSequenceOptions options;
   options.seconds = 12.0;
   SyntheticSequence(options).Write(temp.path());
-  const io::EurocSequence sequence = io::EurocSequence::Open(temp.path());
+  const datasets::EurocSequence sequence = datasets::EurocSequence::Open(temp.path());
   const camera::StereoRectifier rectifier =
       camera::StereoRectifier::FromCalibration(sequence.calibration());
-  pipeline::StereoOdometry odometry(pipeline::PipelineOptions{}, rectifier, [] { return 0.0; });
+  pipeline::StereoOdometry odometry(pipeline::FrontEndOptions{}, backend::BundleAdjustmentOptions{},
+                                    rectifier, [] { return 0.0; });
   int tracked = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    const io::StereoImages images = sequence.LoadStereoPair(i);
+    const datasets::StereoImages images = sequence.LoadStereoPair(i);
     tracked += odometry.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right).state !=
                        odometry::TrackingState::kLost
                    ? 1

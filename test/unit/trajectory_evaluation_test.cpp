@@ -7,7 +7,7 @@
 #include "stereo_fabmap_slam/evaluation/association.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
-#include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/input_error.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {

@@ -8,23 +8,13 @@
 
 #include <Eigen/Geometry>
 
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
-#include "stereo_fabmap_slam/odometry/keyframe_data.h"
+#include "stereo_fabmap_slam/map/keyframe.h"
+#include "stereo_fabmap_slam/map/keyframe_update.h"
 
 namespace stereo_fabmap_slam::backend {
-
-struct BundleAdjustmentOptions {
-  int window = 15;          // keyframes optimised together
-  int fixed_keyframes = 1;  // the oldest keyframes of the window are held fixed (the gauge)
-  int iterations = 10;      // Levenberg-Marquardt iterations a round
-  int rounds = 2;           // optimise, remove outlier observations, optimise again
-  double sigma = 1.0;       // [px] key point position noise
-  int threads = 1;
-
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;
-};
 
 // Windowed bundle adjustment with Ceres: the last `window` keyframes and the points they see,
 // stereo reprojection residuals (u_left, v, u_right) with a Huber loss; the oldest keyframes of
@@ -35,10 +25,12 @@ struct BundleAdjustmentOptions {
 // Keeps every keyframe (pose and observations), so its memory grows with keyframes only.
 class LocalBundleAdjuster {
  public:
-  LocalBundleAdjuster(const BundleAdjustmentOptions& options, const camera::StereoCamera& camera);
+  LocalBundleAdjuster(const BundleAdjustmentOptions& options, const geometry::StereoCamera& camera);
 
-  // Adds a keyframe and optimises the window; returns what changed.
-  odometry::KeyframeUpdate AddKeyframe(const odometry::KeyframeData& keyframe);
+  // Adds a keyframe and optimises the window; returns what changed. With optimise = false the
+  // keyframe only joins the map and the window (a caller that falls behind optimises once for
+  // several keyframes); the update is then empty.
+  map::KeyframeUpdate AddKeyframe(const map::Keyframe& keyframe, bool optimise = true);
 
   // Latest pose (T_world_camera) of every keyframe so far, by id.
   std::map<std::int64_t, Eigen::Isometry3d> KeyframePoses() const;
@@ -61,10 +53,10 @@ class LocalBundleAdjuster {
     std::vector<std::int64_t> points;
   };
 
-  odometry::KeyframeUpdate Optimise();
+  map::KeyframeUpdate Optimise();
 
   BundleAdjustmentOptions options_;
-  camera::StereoCamera camera_;
+  geometry::StereoCamera camera_;
   std::map<std::int64_t, Keyframe> keyframes_;
   std::unordered_map<std::int64_t, Point> points_;
   std::deque<std::int64_t> window_;

@@ -6,7 +6,8 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/camera/camera_options.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 
 namespace stereo_fabmap_slam::camera {
@@ -19,14 +20,6 @@ struct RectificationParameters {
   std::vector<double> D;  // k1 k2 p1 p2 [k3]
   cv::Matx33d R;
   cv::Matx34d P;
-};
-
-struct RectificationOptions {
-  // OpenCV's free scaling: 0 keeps only valid pixels (no black borders that would make edges
-  // for the detector), 1 keeps every raw pixel.
-  double alpha = 0.0;
-  void Visit(io::OptionVisitor& visitor) { visitor.Visit("alpha", &alpha); }
-  void Validate() const;
 };
 
 // Turns raw stereo images into a rectified pair described by a StereoCamera. Built once, then
@@ -48,7 +41,7 @@ class StereoRectifier {
   void Rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat* left,
                cv::Mat* right) const;
 
-  const StereoCamera& camera() const { return camera_; }
+  const geometry::StereoCamera& camera() const { return camera_; }
   const RectificationParameters& left_parameters() const { return left_; }
   const RectificationParameters& right_parameters() const { return right_; }
   // Pose of the rectified left camera in the body frame (T_BS of the camera that odometry tracks).
@@ -58,7 +51,7 @@ class StereoRectifier {
   StereoRectifier() = default;
 
   RectificationParameters left_, right_;
-  StereoCamera camera_;
+  geometry::StereoCamera camera_;
   Eigen::Isometry3d T_body_rectified_left_ = Eigen::Isometry3d::Identity();
   cv::Mat left_map1_, left_map2_, right_map1_, right_map2_;
 };

@@ -5,7 +5,7 @@
 
 #include <opencv2/features2d.hpp>
 
-#include "stereo_fabmap_slam/features/feature_options.h"
+#include "stereo_fabmap_slam/features/features_options.h"
 
 namespace stereo_fabmap_slam::features {
 

@@ -4,12 +4,12 @@
 
 #include <opencv2/features2d.hpp>
 
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
 #include "stereo_fabmap_slam/features/adaptive_detector.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
-#include "stereo_fabmap_slam/features/feature_options.h"
+#include "stereo_fabmap_slam/features/features_options.h"
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/features/stereo_matcher.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 
 namespace stereo_fabmap_slam::features {
 
@@ -31,7 +31,7 @@ class StereoFeatureExtractor {
   // Throws std::invalid_argument for bad options or an unknown detector/descriptor.
   StereoFeatureExtractor(const FeatureOptions& feature_options,
                          const StereoMatcherOptions& stereo_options,
-                         const camera::StereoCamera& camera);
+                         const geometry::StereoCamera& camera);
 
   Detected Detect(const cv::Mat& left, const cv::Mat& right);
   Described Describe(const cv::Mat& left, const cv::Mat& right, Detected detected) const;
@@ -40,11 +40,11 @@ class StereoFeatureExtractor {
 
   int descriptor_norm() const { return descriptor_.norm; }
   double max_match_distance() const { return descriptor_.max_match_distance; }
-  const camera::StereoCamera& camera() const { return camera_; }
+  const geometry::StereoCamera& camera() const { return camera_; }
 
  private:
   FeatureOptions options_;
-  camera::StereoCamera camera_;
+  geometry::StereoCamera camera_;
   AdaptiveDetector left_detector_, right_detector_;
   DescriptorKind descriptor_;
   cv::Ptr<cv::DescriptorExtractor> second_extractor_;  // for the second thread: no shared state

@@ -7,29 +7,11 @@
 
 #include <opencv2/core.hpp>
 
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/features/features_options.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 
 namespace stereo_fabmap_slam::features {
-
-struct StereoMatcherOptions {
-  // "patch": right candidates are compared with the left key point by zero-mean normalised
-  // cross-correlation of image patches, so the right image needs no descriptors (fast);
-  // "descriptor": by descriptor distance (the right key points are described too).
-  std::string mode = "patch";
-  double max_patch_distance = 0.3;  // patch mode: 1 - NCC of a match must stay below this
-  double max_row_difference = 2.0;  // [px] rectified rows of a match may differ this much
-  double max_disparity = 150.0;     // [px] closest points (~0.3 m on EuRoC)
-  double ratio = 0.8;               // best distance / second best must stay below this
-  double min_depth = 0.2;           // [m]
-  double max_depth = 25.0;          // [m] farther points triangulate too poorly to keep
-  bool subpixel = true;             // refine the right column by patch correlation
-  int patch_radius = 5;             // [px] half side of the correlation patch
-  int search_radius = 3;            // [px] columns searched either side of the matched key point
-
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;
-};
 
 // Matches left key points to right key points of a rectified pair: candidates lie on the same
 // row band and within the disparity range; the best distance (patch or descriptor) must be below
@@ -39,10 +21,10 @@ struct StereoMatcherOptions {
 class StereoMatcher {
  public:
   // parallel: match the two halves of the left key points on two threads.
-  StereoMatcher(const StereoMatcherOptions& options, const camera::StereoCamera& camera, int norm,
+  StereoMatcher(const StereoMatcherOptions& options, const geometry::StereoCamera& camera, int norm,
                 double max_descriptor_distance, bool parallel = false);
 
-  bool uses_descriptors() const { return options_.mode == "descriptor"; }
+  bool uses_descriptors() const { return options_.mode == StereoMatchMode::kDescriptor; }
 
   // For each left key point, the right column of its match, or -1 (no match, or a depth outside
   // [min_depth, max_depth]). right_descriptors are needed in descriptor mode only.
@@ -69,7 +51,7 @@ class StereoMatcher {
                      const cv::Mat& right_image, float right_column) const;
 
   StereoMatcherOptions options_;
-  camera::StereoCamera camera_;
+  geometry::StereoCamera camera_;
   int norm_;
   double max_descriptor_distance_;
   bool parallel_;

@@ -7,13 +7,18 @@
 
 #include <Eigen/Geometry>
 
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
 
 namespace stereo_fabmap_slam::geometry {
 
 // Minimal solvers for the RANSAC hypotheses: OpenCV's PnP kernels (2-D-3-D), or a 3-D-3-D
 // Umeyama fit that uses the stereo depth of the current frame.
 enum class PnpKernel { kIterative, kEpnp, kAp3p, kP3p, kSqpnp, kUmeyama };
+inline constexpr io::EnumName<PnpKernel> kPnpKernelNames[] = {
+    {PnpKernel::kIterative, "ITERATIVE"}, {PnpKernel::kEpnp, "EPNP"},
+    {PnpKernel::kAp3p, "AP3P"},           {PnpKernel::kP3p, "P3P"},
+    {PnpKernel::kSqpnp, "SQPNP"},         {PnpKernel::kUmeyama, "UMEYAMA"}};
 
 std::optional<PnpKernel> ParsePnpKernel(const std::string& name);  // "ITERATIVE", "EPNP", ...
 std::string PnpKernelNames();                                      // for error messages
@@ -41,7 +46,7 @@ struct PnpResult {
 
 // Robust camera pose from correspondences. `guess` (T_camera_world) seeds the iterative kernel.
 PnpResult SolvePnpRansac(const std::vector<PnpCorrespondence>& correspondences,
-                         const camera::StereoCamera& camera, const PnpRansacOptions& options,
+                         const geometry::StereoCamera& camera, const PnpRansacOptions& options,
                          const Eigen::Isometry3d& guess);
 
 }  // namespace stereo_fabmap_slam::geometry

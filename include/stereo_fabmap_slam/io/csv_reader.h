@@ -1,20 +1,12 @@
 #pragma once
 
 #include <cstdint>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "stereo_fabmap_slam/io/input_error.h"
+
 namespace stereo_fabmap_slam::io {
-
-// Bad input in a file, with the file and line it came from in the message.
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-// Builds "path:line: message" (line 0 means the file as a whole).
-InputError FileError(const std::string& path, std::size_t line, const std::string& message);
 
 // One non-blank, non-comment line of a delimited text file, split into trimmed fields.
 struct TextRow {

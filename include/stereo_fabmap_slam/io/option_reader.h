@@ -3,6 +3,7 @@
 #include <optional>
 #include <ostream>
 #include <set>
+#include <stdexcept>
 #include <string>
 
 #include "stereo_fabmap_slam/io/yaml_file.h"
@@ -20,6 +21,35 @@ class OptionVisitor {
   virtual void Visit(const std::string& key, bool* value) = 0;
   virtual void Visit(const std::string& key, std::string* value) = 0;
 };
+
+// One value of an enumerated option and its name in configuration files.
+template <typename Enum>
+struct EnumName {
+  Enum value;
+  const char* name;
+};
+
+// Visits an enumerated field by its name, so that a mode is parsed once when the options are
+// read (never compared as a string per query). An unknown name throws std::invalid_argument
+// listing the known ones.
+template <typename Enum, std::size_t N>
+void VisitEnum(OptionVisitor& visitor, const std::string& key, Enum* value,
+               const EnumName<Enum> (&names)[N]) {
+  std::string name;
+  for (const EnumName<Enum>& entry : names) {
+    if (entry.value == *value) name = entry.name;
+  }
+  visitor.Visit(key, &name);
+  std::string known;
+  for (const EnumName<Enum>& entry : names) {
+    if (name == entry.name) {
+      *value = entry.value;
+      return;
+    }
+    known += (known.empty() ? "" : ", ") + std::string(entry.name);
+  }
+  throw std::invalid_argument(key + " '" + name + "' is unknown; available: " + known);
+}
 
 // Fills fields from one YAML mapping: every key is optional (the default stays), a key of the
 // wrong type is an error naming file and line, and so is a key no field asked for (a typo must

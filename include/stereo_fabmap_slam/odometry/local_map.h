@@ -8,7 +8,8 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "stereo_fabmap_slam/odometry/keyframe_data.h"
+#include "stereo_fabmap_slam/map/keyframe.h"
+#include "stereo_fabmap_slam/map/keyframe_update.h"
 
 namespace stereo_fabmap_slam::odometry {
 
@@ -26,8 +27,8 @@ class LocalMap {
   explicit LocalMap(int max_keyframes) : max_keyframes_(max_keyframes) {}
 
   // Adds a keyframe (creating its new points) and drops the oldest beyond max_keyframes.
-  void AddKeyframe(const KeyframeData& keyframe);
-  void ApplyUpdate(const KeyframeUpdate& update);
+  void AddKeyframe(const map::Keyframe& keyframe);
+  void ApplyUpdate(const map::KeyframeUpdate& update);
   void Clear();
 
   const std::map<std::int64_t, MapPoint>& points() const { return points_; }

@@ -4,8 +4,9 @@
 
 #include <Eigen/Geometry>
 
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/odometry/odometry_options.h"
 
 namespace stereo_fabmap_slam::odometry {
 
@@ -14,14 +15,6 @@ struct PoseObservation {
   Eigen::Vector3d world;
   double u = 0, v = 0;
   double u_right = -1;  // < 0: no stereo match in this frame
-};
-
-struct PoseRefinementOptions {
-  double sigma = 1.0;   // [px] key point position noise
-  int rounds = 2;       // optimise, re-classify outliers, optimise again...
-  int iterations = 10;  // Levenberg-Marquardt iterations a round
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;
 };
 
 struct PoseRefinement {
@@ -36,7 +29,7 @@ struct PoseRefinement {
 // of the next round, and may come back if the pose moves.
 // `initial_inliers` (optional) says which observations the first round uses.
 PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
-                          const camera::StereoCamera& camera, const Eigen::Isometry3d& initial,
+                          const geometry::StereoCamera& camera, const Eigen::Isometry3d& initial,
                           const PoseRefinementOptions& options,
                           const std::vector<bool>* initial_inliers = nullptr);
 

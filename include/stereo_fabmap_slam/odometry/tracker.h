@@ -7,34 +7,18 @@
 
 #include <Eigen/Geometry>
 
-#include "stereo_fabmap_slam/camera/stereo_camera.h"
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
-#include "stereo_fabmap_slam/odometry/keyframe_data.h"
+#include "stereo_fabmap_slam/map/keyframe.h"
+#include "stereo_fabmap_slam/map/keyframe_update.h"
 #include "stereo_fabmap_slam/odometry/keyframe_policy.h"
 #include "stereo_fabmap_slam/odometry/local_map.h"
+#include "stereo_fabmap_slam/odometry/odometry_options.h"
 #include "stereo_fabmap_slam/odometry/pose_refiner.h"
 
 namespace stereo_fabmap_slam::odometry {
-
-struct TrackerOptions {
-  double search_radius = 15.0;      // [px] around a map point's predicted projection
-  double search_radius_fine = 4.0;  // [px] second search, around the refined pose's projection
-  double match_ratio = 0.85;        // best / second-best descriptor distance
-  std::string pnp_kernel = "AP3P";  // ITERATIVE, EPNP, AP3P, P3P, SQPNP, UMEYAMA
-  double ransac_threshold = 2.0;    // [px]
-  int ransac_iterations = 100;
-  int min_inliers_ok = 50;    // fewer inliers: tracking weak
-  int min_inliers_weak = 15;  // fewer inliers: tracking lost
-  int min_map_points = 30;    // stereo points needed to start a map
-  int local_keyframes = 16;   // recent keyframes whose points the tracker searches
-  bool parallel = true;       // search map points on two threads
-  PoseRefinementOptions refinement;
-
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;
-};
 
 enum class TrackingState { kOk, kWeak, kLost };
 const char* TrackingStateName(TrackingState state);
@@ -48,7 +32,7 @@ struct TrackingResult {
   // The pose relative to a keyframe, so that the trajectory follows later keyframe corrections.
   std::int64_t reference_keyframe = -1;
   Eigen::Isometry3d T_keyframe_camera = Eigen::Isometry3d::Identity();
-  std::optional<KeyframeData> keyframe;  // set if this frame became a keyframe
+  std::optional<map::Keyframe> keyframe;  // set if this frame became a keyframe
 };
 
 // Frame-to-map tracking: predicts the pose with a constant-velocity model, finds local map points
@@ -59,11 +43,12 @@ class Tracker {
  public:
   // Throws std::invalid_argument for bad options.
   Tracker(const TrackerOptions& options, const KeyframePolicyOptions& keyframe_options,
-          const camera::StereoCamera& camera, int descriptor_norm, double max_descriptor_distance);
+          const geometry::StereoCamera& camera, int descriptor_norm,
+          double max_descriptor_distance);
 
   TrackingResult Track(double timestamp, features::StereoFeatures features);
   // Optimised keyframe poses and points from the backend.
-  void ApplyUpdate(const KeyframeUpdate& update);
+  void ApplyUpdate(const map::KeyframeUpdate& update);
   // Forget the map and the motion (e.g. time went backwards); the next frame starts a new map.
   void Reset();
 
@@ -79,16 +64,21 @@ class Tracker {
                                         double radius) const;
   std::vector<PoseObservation> Observations(const features::StereoFeatures& features,
                                             const std::vector<Match>& matches) const;
-  KeyframeData MakeKeyframe(double timestamp, features::StereoFeatures features,
-                            const Eigen::Isometry3d& T_world_camera,
-                            const std::vector<Match>& inlier_matches, bool starts_new_map);
+  map::Keyframe MakeKeyframe(double timestamp, features::StereoFeatures features,
+                             const Eigen::Isometry3d& T_world_camera,
+                             const std::vector<Match>& inlier_matches, bool starts_new_map);
   void StartMap(double timestamp, features::StereoFeatures features,
                 const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
-  void Remember(double timestamp, const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
+  // The exit of a frame that could not be tracked against a map (there is none, or tracking
+  // failed): a new map starts at the predicted pose if the frame has enough stereo points, and
+  // the frame is lost otherwise.
+  TrackingResult StartOver(double timestamp, features::StereoFeatures features,
+                           const Eigen::Isometry3d& predicted, TrackingResult result);
+  void Remember(const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
 
   TrackerOptions options_;
   KeyframePolicy keyframe_policy_;
-  camera::StereoCamera camera_;
+  geometry::StereoCamera camera_;
   geometry::PnpRansacOptions ransac_options_;
   int descriptor_norm_;
   double max_descriptor_distance_;
@@ -99,7 +89,6 @@ class Tracker {
   bool had_map_ = false;
 
   bool has_last_ = false;
-  double last_timestamp_ = 0;
   Eigen::Isometry3d last_T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();  // T_previous_current
   Eigen::Isometry3d last_keyframe_pose_ = Eigen::Isometry3d::Identity();

@@ -5,11 +5,29 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/features/features_options.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
+#include "stereo_fabmap_slam/odometry/odometry_options.h"
 #include "stereo_fabmap_slam/odometry/tracker.h"
-#include "stereo_fabmap_slam/pipeline/pipeline_options.h"
 
 namespace stereo_fabmap_slam::pipeline {
+
+// The options of the modules the front end is built from, each read from its own section.
+struct FrontEndOptions {
+  features::FeatureOptions features;
+  features::StereoMatcherOptions stereo;
+  odometry::TrackerOptions tracker;
+  odometry::KeyframePolicyOptions keyframes;
+
+  // Calls visit(options) for each module's options, e.g. to read, validate or print them all.
+  template <typename Visit>
+  void ForEachModule(Visit visit) {
+    visit(features);
+    visit(stereo);
+    visit(tracker);
+    visit(keyframes);
+  }
+};
 
 // Milliseconds spent per stage of one frame.
 struct FrameTiming {
@@ -32,14 +50,14 @@ class StereoFrontEnd {
  public:
   using Clock = std::function<double()>;
 
-  StereoFrontEnd(const PipelineOptions& options, camera::StereoRectifier rectifier, Clock clock);
+  StereoFrontEnd(const FrontEndOptions& options, camera::StereoRectifier rectifier, Clock clock);
 
   // Raw (unrectified) mono8 images of the calibrated size; throws std::invalid_argument otherwise.
   FrontEndOutput Process(double timestamp, const cv::Mat& left_raw, const cv::Mat& right_raw);
-  void ApplyUpdate(const odometry::KeyframeUpdate& update) { tracker_.ApplyUpdate(update); }
+  void ApplyUpdate(const map::KeyframeUpdate& update) { tracker_.ApplyUpdate(update); }
   void Reset() { tracker_.Reset(); }
 
-  const camera::StereoCamera& camera() const { return rectifier_.camera(); }
+  const geometry::StereoCamera& camera() const { return rectifier_.camera(); }
 
  private:
   camera::StereoRectifier rectifier_;

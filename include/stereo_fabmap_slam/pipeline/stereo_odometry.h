@@ -33,8 +33,9 @@ class StereoOdometry {
  public:
   using Clock = StereoFrontEnd::Clock;
 
-  StereoOdometry(const PipelineOptions& options, const camera::StereoRectifier& rectifier,
-                 Clock clock);
+  StereoOdometry(const FrontEndOptions& front_end_options,
+                 const backend::BundleAdjustmentOptions& bundle_adjustment_options,
+                 const camera::StereoRectifier& rectifier, Clock clock);
 
   // Raw (unrectified) mono8 images of one stereo pair.
   const FrameRecord& ProcessFrame(double timestamp, const cv::Mat& left_raw,

@@ -8,30 +8,9 @@
 #include "stereo_fabmap_slam/io/option_reader.h"
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
 #include "stereo_fabmap_slam/place_recognition/place_database.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
 namespace stereo_fabmap_slam::place_recognition {
-
-struct FabMapOptions {
-  double p_z_given_e = 0.39;     // detector model: p(word seen | scene element present)
-  double p_z_given_not_e = 0.0;  // p(word seen | element absent): false detections
-  double new_place_prior = 0.9;  // prior that a view shows a place not in the map
-  double smoothing = 0.99;       // posterior smoothing: p -> s p + (1 - s) / (places + 1)
-  std::string new_place_model = "mean_field";  // mean_field, or sampling (training places)
-  std::string location_prior =
-      "uniform";               // uniform, or motion (favours the last match's neighbours)
-  double motion_weight = 0.6;  // motion prior: share of the existing-place mass on neighbours
-  bool inverted_index = true;  // FAB-MAP 2.0 (inverted index); false: FAB-MAP 1.0 (every word)
-  // FAB-MAP 2.0 only. false: a word absent from the view is scored as if its Chow-Liu parent
-  // were absent too, so that only the view's own words are looked up (half the index reads;
-  // it finds the same best place as FAB-MAP 1.0, see the tests). true: also correct the absent
-  // children of the view's words, giving FAB-MAP 1.0's log-likelihoods (to the single precision
-  // in which 2.0 sums each place's corrections: within 1e-6 of the value) and ranking.
-  bool exact_tree_corrections = false;
-  double match_threshold = 0.5;  // Add(): update the best place at this posterior, else add one
-
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;  // throws std::invalid_argument
-};
 
 // Per-word probabilities of the FAB-MAP observation model (Cummins & Newman, IJRR 2008): the
 // detector model, the place appearance p(e | place) after a place's observations, and the

@@ -4,7 +4,7 @@
 
 #include "stereo_fabmap_slam/features/adaptive_detector.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
-#include "stereo_fabmap_slam/features/feature_options.h"
+#include "stereo_fabmap_slam/features/features_options.h"
 
 namespace stereo_fabmap_slam::place_recognition {
 

@@ -7,18 +7,9 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
 namespace stereo_fabmap_slam::place_recognition {
-
-struct VocabularyOptions {
-  int branching = 10;  // children per node
-  int depth = 4;       // levels: up to branching^depth words (10,000 by default)
-  int iterations = 8;  // clustering iterations per node
-  int seed = 1;
-
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;  // throws std::invalid_argument
-};
 
 // Visual words: the leaves of a tree of cluster centres, learnt by clustering training descriptors
 // level by level (hierarchical k-majority in Hamming space for binary descriptors, hierarchical

@@ -1,0 +1,69 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "stereo_fabmap_slam/datasets/texture_library.h"
+
+namespace stereo_fabmap_slam::datasets {
+
+// What a ray sees on a face: a grid of panels, each showing one texture stretched over it.
+struct Material {
+  std::vector<int> panel_textures;  // row-major, panel_columns x panel_rows, into textures()
+  int panel_columns = 1, panel_rows = 1;
+  float shade = 1.0f;  // per-face brightness, so that faces meeting at an edge differ
+  // Derived when the scene is built: panels per metre along the face's two axes.
+  float panels_per_metre_u = 0, panels_per_metre_v = 0;
+};
+
+// An axis-aligned box; faces in the order -x, +x, -y, +y, -z, +z.
+struct Box {
+  Eigen::Vector3f min, max;
+  Material faces[6];
+};
+
+struct HallOptions {
+  float length = 20.0f, width = 12.0f,
+        height = 5.0f;       // [m] the hall spans [0, L] x [0, W] x [0, H]
+  float panel_width = 2.5f;  // [m] photo panels along the walls
+  int obstacle_boxes = 8;
+  int pillars = 4;
+  // Obstacles stay outside this ellipse around the hall centre, so that routes inside it are free.
+  float clear_semi_axis_x = 7.2f, clear_semi_axis_y = 4.4f;
+};
+
+// A textured indoor hall of walls, floor and ceiling, with boxes and pillars, built from a seed
+// (the same seed gives the same hall) and traced ray by ray.
+class HallScene {
+ public:
+  HallScene(const HallOptions& options, const TextureLibrary& photos, std::uint64_t seed);
+  // A scene of given boxes and textures (e.g. for tests); `boxes[0]` is the room seen from inside.
+  HallScene(std::vector<Box> boxes, std::vector<Texture> textures);
+
+  // Grey level (0-255) seen along a ray from `origin` in the unit `direction`; `pixel_angle` is the
+  // angle a pixel spans [rad], for choosing the texture resolution. 0 if the ray leaves the hall.
+  // `obstacles`: indices into boxes() that the ray may hit (e.g. those in front of the camera);
+  // all obstacles if null.
+  float Trace(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float pixel_angle,
+              const std::vector<int>* obstacles = nullptr) const;
+  // Obstacles not entirely behind a camera at T_world_camera (z <= 0 for all corners).
+  std::vector<int> ObstaclesInFront(const Eigen::Matrix3f& world_to_camera_rotation,
+                                    const Eigen::Vector3f& camera_position) const;
+
+  const std::vector<Box>& boxes() const { return boxes_; }
+  const std::vector<Texture>& textures() const { return textures_; }
+  const HallOptions& options() const { return options_; }
+
+ private:
+  void DeriveScales();  // fills Material::panels_per_metre_*
+  float Shade(const Box& box, int face, const Eigen::Vector3f& point, float distance,
+              float cos_incidence, float pixel_angle) const;
+
+  HallOptions options_;
+  std::vector<Box> boxes_;  // boxes_[0]: the hall itself, seen from inside
+  std::vector<Texture> textures_;
+};
+
+}  // namespace stereo_fabmap_slam::datasets

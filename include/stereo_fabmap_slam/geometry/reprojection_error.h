@@ -1,0 +1,82 @@
+#pragma once
+
+#include <ceres/ceres.h>
+#include <Eigen/Geometry>
+
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
+
+namespace stereo_fabmap_slam::geometry {
+
+// Reprojection error of a world point in a rectified stereo camera, in units of the pixel noise
+// sigma: (u_left, v) and, for a stereo observation, u_right. Parameter blocks: the rotation of
+// T_camera_world as an Eigen quaternion (x, y, z, w), its translation, and the point.
+class ReprojectionError {
+ public:
+  // u_right < 0: a mono observation (2 residuals); otherwise stereo (3 residuals).
+  static ceres::CostFunction* Create(const geometry::StereoCamera& camera, double u, double v,
+                                     double u_right, double sigma);
+
+  ReprojectionError(const geometry::StereoCamera& camera, double u, double v, double u_right,
+                    double sigma)
+      : fx_(camera.fx),
+        fy_(camera.fy),
+        cx_(camera.cx),
+        cy_(camera.cy),
+        fx_baseline_(camera.fx * camera.baseline),
+        u_(u),
+        v_(v),
+        u_right_(u_right),
+        inverse_sigma_(1.0 / sigma) {}
+
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, const T* point, T* residuals) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p(point);
+    const Eigen::Matrix<T, 3, 1> c = q * p + t;
+    const T inverse_z = T(1.0) / c.z();
+    const T u = T(fx_) * c.x() * inverse_z + T(cx_);
+    residuals[0] = (u - T(u_)) * T(inverse_sigma_);
+    residuals[1] = (T(fy_) * c.y() * inverse_z + T(cy_) - T(v_)) * T(inverse_sigma_);
+    if (u_right_ >= 0) {
+      residuals[2] = (u - T(fx_baseline_) * inverse_z - T(u_right_)) * T(inverse_sigma_);
+    }
+    return true;
+  }
+
+ private:
+  double fx_, fy_, cx_, cy_, fx_baseline_;
+  double u_, v_, u_right_, inverse_sigma_;
+};
+
+// The same error for a point held fixed (motion-only optimisation): the point is part of the
+// functor, so the problem has only the two pose blocks.
+class FixedPointReprojectionError {
+ public:
+  static ceres::CostFunction* Create(const geometry::StereoCamera& camera,
+                                     const Eigen::Vector3d& point, double u, double v,
+                                     double u_right, double sigma);
+
+  FixedPointReprojectionError(const geometry::StereoCamera& camera, const Eigen::Vector3d& point,
+                              double u, double v, double u_right, double sigma)
+      : error_(camera, u, v, u_right, sigma), point_(point) {}
+
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, T* residuals) const {
+    const T point[3] = {T(point_.x()), T(point_.y()), T(point_.z())};
+    return error_(rotation, translation, point, residuals);
+  }
+
+ private:
+  ReprojectionError error_;
+  Eigen::Vector3d point_;
+};
+
+// Squared error in units of sigma^2 of an observation at a pose, and whether it has 3 residuals;
+// for chi-square outlier tests outside Ceres. A point behind the camera gives infinity.
+double SquaredReprojectionError(const geometry::StereoCamera& camera,
+                                const Eigen::Isometry3d& T_camera_world,
+                                const Eigen::Vector3d& point, double u, double v, double u_right,
+                                double sigma);
+
+}  // namespace stereo_fabmap_slam::geometry

@@ -1,0 +1,52 @@
+#pragma once
+
+#include <string>
+
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
+
+namespace stereo_fabmap_slam::odometry {
+
+struct PoseRefinementOptions {
+  double sigma = 1.0;   // [px] key point position noise
+  int rounds = 2;       // optimise, re-classify outliers, optimise again...
+  int iterations = 10;  // Levenberg-Marquardt iterations a round
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
+struct KeyframePolicyOptions {
+  static constexpr char kSection[] = "keyframes";
+
+  double min_tracked_ratio = 0.7;  // tracked points / most tracked in a frame since the keyframe
+  int min_tracked_points = 80;     // fewer tracked map points: new keyframe
+  double max_translation = 0.25;   // [m] since the last keyframe
+  double max_rotation_deg = 10.0;  // [deg] since the last keyframe
+  double max_interval = 1.0;       // [s] since the last keyframe
+  double min_interval = 0.0;       // [s] never closer (except when tracking is weak)
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
+struct TrackerOptions {
+  static constexpr char kSection[] = "tracker";
+
+  double search_radius = 15.0;      // [px] around a map point's predicted projection
+  double search_radius_fine = 4.0;  // [px] second search, around the refined pose's projection
+  double match_ratio = 0.85;        // best / second-best descriptor distance
+  geometry::PnpKernel pnp_kernel = geometry::PnpKernel::kAp3p;  // ITERATIVE, EPNP, AP3P, ...
+  double ransac_threshold = 2.0;                                // [px]
+  int ransac_iterations = 100;
+  int min_inliers_ok = 50;    // fewer inliers: tracking weak
+  int min_inliers_weak = 15;  // fewer inliers: tracking lost
+  int min_map_points = 30;    // stereo points needed to start a map
+  int local_keyframes = 16;   // recent keyframes whose points the tracker searches
+  bool parallel = true;       // search map points on two threads
+  PoseRefinementOptions refinement;
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
+}  // namespace stereo_fabmap_slam::odometry

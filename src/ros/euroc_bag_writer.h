@@ -1,0 +1,14 @@
+#pragma once
+
+#include <string>
+
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+
+namespace stereo_fabmap_slam::ros_conversions {
+
+// Writes an EuRoC sequence into a bag, in time order as a recorder would: /cam0/image_raw and
+// /cam1/image_raw (mono8, stamp = image time, frame ids cam0 and cam1) and, if the sequence has
+// ground truth, /ground_truth (geometry_msgs/PoseStamped, body frame in "world").
+void WriteEurocBag(const datasets::EurocSequence& sequence, const std::string& bag_path);
+
+}  // namespace stereo_fabmap_slam::ros_conversions

@@ -1,0 +1,32 @@
+#pragma once
+
+#include <ostream>
+#include <string>
+
+#include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/camera/camera_options.h"
+#include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+
+namespace stereo_fabmap_slam::tools {
+
+// What the offline tools read from config/euroc.yaml (and its presets): every section of the
+// file, each into its module's Options. The nodelets read the same sections, each its own.
+struct SlamConfiguration {
+  camera::RectificationOptions rectification;
+  pipeline::FrontEndOptions front_end;
+  backend::BundleAdjustmentOptions bundle_adjustment;
+
+  template <typename Visit>
+  void ForEachModule(Visit visit) {
+    visit(rectification);
+    front_end.ForEachModule(visit);
+    visit(bundle_adjustment);
+  }
+
+  // Reads and validates every section; unknown sections and keys, and bad values, throw
+  // io::InputError naming the file (and line).
+  static SlamConfiguration Load(const std::string& path);
+  void Print(std::ostream& out) const;
+};
+
+}  // namespace stereo_fabmap_slam::tools
