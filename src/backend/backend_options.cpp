@@ -1,8 +1,22 @@
 #include "stereo_fabmap_slam/backend/backend_options.h"
 
+#include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace stereo_fabmap_slam::backend {
+namespace {
+
+void RequirePositive(const char* key, double value) {
+  // Written to reject NaN as well: it compares false.
+  if (!(value > 0) || !std::isfinite(value)) {
+    std::ostringstream message;
+    message << "pose_graph." << key << " must be a finite number > 0, got " << value;
+    throw std::invalid_argument(message.str());
+  }
+}
+
+}  // namespace
 
 void BundleAdjustmentOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("window", &window);
@@ -22,6 +36,23 @@ void BundleAdjustmentOptions::Validate() const {
     throw std::invalid_argument("backend iterations, rounds and threads must be >= 1");
   }
   if (!(sigma > 0)) throw std::invalid_argument("backend.sigma must be > 0");
+}
+
+void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("odometry_translation_sigma", &odometry_translation_sigma);
+  visitor.Visit("odometry_rotation_sigma_deg", &odometry_rotation_sigma_deg);
+  visitor.Visit("loop_loss_scale", &loop_loss_scale);
+  visitor.Visit("iterations", &iterations);
+}
+
+void PoseGraphOptions::Validate() const {
+  RequirePositive("odometry_translation_sigma", odometry_translation_sigma);
+  RequirePositive("odometry_rotation_sigma_deg", odometry_rotation_sigma_deg);
+  RequirePositive("loop_loss_scale", loop_loss_scale);
+  if (iterations < 1) {
+    throw std::invalid_argument("pose_graph.iterations must be >= 1, got " +
+                                std::to_string(iterations));
+  }
 }
 
 }  // namespace stereo_fabmap_slam::backend

@@ -8,7 +8,11 @@ StereoFrontEnd::StereoFrontEnd(const FrontEndOptions& options, camera::StereoRec
       clock_(std::move(clock)),
       extractor_(options.features, options.stereo, rectifier_.camera()),
       tracker_(options.tracker, options.keyframes, rectifier_.camera(),
-               extractor_.descriptor_norm(), extractor_.max_match_distance()) {}
+               extractor_.descriptor_norm(), extractor_.max_match_distance()) {
+  if (options.place_features) {
+    place_describer_ = std::make_unique<place_recognition::ImageDescriber>(*options.place_features);
+  }
+}
 
 FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw,
                                        const cv::Mat& right_raw) {
@@ -32,6 +36,10 @@ FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw
   lap(&timing.stereo_ms);
   output.tracking = tracker_.Track(timestamp, std::move(features));
   lap(&timing.tracking_ms);
+  if (output.tracking.keyframe && place_describer_) {
+    output.tracking.keyframe->place_descriptors = place_describer_->Describe(left);
+    lap(&timing.place_description_ms);
+  }
   return output;
 }
 

@@ -19,8 +19,15 @@ const FrameRecord& StereoOdometry::ProcessFrame(double timestamp, const cv::Mat&
   if (result.keyframe) {
     const double start = clock_();
     keyframe_times_[result.keyframe->id] = timestamp;
-    front_end_.ApplyUpdate(bundle_adjuster_.AddKeyframe(*result.keyframe));
+    const map::KeyframeUpdate update = bundle_adjuster_.AddKeyframe(*result.keyframe);
+    front_end_.ApplyUpdate(update);
     record.timing.bundle_adjustment_ms = clock_() - start;
+    if (loop_closing_) {
+      LoopClosingOutput closing = loop_closing_->Process(*result.keyframe, update);
+      record.timing.loop_detection_ms = closing.detection_ms;
+      record.timing.pose_graph_ms = closing.pose_graph_ms;
+      record.loop_detection = std::move(closing.detection);
+    }
   }
   record.state = result.state;
   record.T_world_camera = result.T_world_camera;
@@ -45,9 +52,32 @@ evaluation::Trajectory StereoOdometry::CameraTrajectory() const {
   return trajectory;
 }
 
+void StereoOdometry::EnableLoopClosing(place_recognition::LoopDetector detector,
+                                       const backend::PoseGraphOptions& pose_graph_options) {
+  loop_closing_.emplace(std::move(detector), pose_graph_options, clock_);
+}
+
+evaluation::Trajectory StereoOdometry::MapTrajectory() const {
+  if (!loop_closing_) return CameraTrajectory();
+  const backend::PoseGraph& graph = loop_closing_->pose_graph();
+  evaluation::Trajectory trajectory;
+  for (const FrameRecord& frame : frames_) {
+    if (graph.Contains(frame.reference_keyframe)) {
+      trajectory.push_back(
+          {frame.timestamp, graph.MapPose(frame.reference_keyframe) * frame.T_keyframe_camera});
+    } else {
+      // Before the first keyframe: the odometry's pose, moved by the map's current correction.
+      trajectory.push_back({frame.timestamp, graph.MapToOdom() * frame.T_world_camera});
+    }
+  }
+  return trajectory;
+}
+
 evaluation::Trajectory StereoOdometry::KeyframeTrajectory() const {
   evaluation::Trajectory trajectory;
-  for (const auto& [id, pose] : bundle_adjuster_.KeyframePoses()) {
+  const std::map<std::int64_t, Eigen::Isometry3d> poses =
+      loop_closing_ ? loop_closing_->pose_graph().MapPoses() : bundle_adjuster_.KeyframePoses();
+  for (const auto& [id, pose] : poses) {
     trajectory.push_back({keyframe_times_.at(id), pose});
   }
   return trajectory;

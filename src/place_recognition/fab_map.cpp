@@ -311,6 +311,12 @@ FabMapResult FabMap::Compare(const std::vector<int>& words) const {
   return result;
 }
 
+int FabMap::AddPlace(const std::vector<int>& words) {
+  const int index = places_.database.AddPlace(words);
+  places_.hit_sums.push_back(HitSum(places_.database.place(index)));
+  return index;
+}
+
 FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
   FabMapResult result = Compare(words);
   int index;
@@ -320,8 +326,7 @@ FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
     places_.database.UpdatePlace(index, words);
     places_.hit_sums[static_cast<std::size_t>(index)] = HitSum(places_.database.place(index));
   } else {
-    index = places_.database.AddPlace(words);
-    places_.hit_sums.push_back(HitSum(places_.database.place(index)));
+    index = AddPlace(words);
   }
   last_match_ = index;
   if (place != nullptr) *place = index;

@@ -56,6 +56,51 @@ void FabMapOptions::Validate() const {
     throw std::invalid_argument("fabmap.match_threshold must lie in (0, 1]");
 }
 
+void LoopDetectorOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("min_age", &min_age);
+  visitor.Visit("min_probability", &min_probability);
+  visitor.Visit("max_candidates", &max_candidates);
+  visitor.Visit("match_ratio", &match_ratio);
+  io::VisitEnum(visitor, "pnp_kernel", &pnp_kernel, geometry::kPnpKernelNames);
+  visitor.Visit("ransac_threshold", &ransac_threshold);
+  visitor.Visit("ransac_iterations", &ransac_iterations);
+  visitor.Visit("min_inliers", &min_inliers);
+  visitor.Visit("min_inlier_cells", &min_inlier_cells);
+  visitor.Visit("max_drift_fraction", &max_drift_fraction);
+  visitor.Visit("min_drift_allowance", &min_drift_allowance);
+  visitor.Visit("max_rotation_drift_deg", &max_rotation_drift_deg);
+  visitor.Visit("max_loop_distance", &max_loop_distance);
+  visitor.Visit("translation_sigma", &translation_sigma);
+  visitor.Visit("rotation_sigma_deg", &rotation_sigma_deg);
+}
+
+void LoopDetectorOptions::Validate() const {
+  if (!(min_age >= 0)) throw std::invalid_argument("loop_detection.min_age must be >= 0");
+  if (!(min_probability >= 0 && min_probability <= 1)) {
+    throw std::invalid_argument("loop_detection.min_probability must lie in [0, 1]");
+  }
+  if (max_candidates < 1) throw std::invalid_argument("loop_detection.max_candidates must be >= 1");
+  if (!(match_ratio > 0 && match_ratio <= 1)) {
+    throw std::invalid_argument("loop_detection.match_ratio must lie in (0, 1]");
+  }
+  if (!(ransac_threshold > 0) || ransac_iterations < 1) {
+    throw std::invalid_argument("loop_detection RANSAC threshold and iterations must be > 0");
+  }
+  if (min_inliers < 6) throw std::invalid_argument("loop_detection.min_inliers must be >= 6");
+  if (min_inlier_cells < 1 || min_inlier_cells > 16) {
+    throw std::invalid_argument("loop_detection.min_inlier_cells must lie in [1, 16]");
+  }
+  if (!(max_drift_fraction > 0) || !(min_drift_allowance > 0) || !(max_rotation_drift_deg > 0)) {
+    throw std::invalid_argument("loop_detection drift allowances must be > 0");
+  }
+  if (!(max_loop_distance > 0)) {
+    throw std::invalid_argument("loop_detection.max_loop_distance must be > 0");
+  }
+  if (!(translation_sigma > 0) || !(rotation_sigma_deg > 0)) {
+    throw std::invalid_argument("loop_detection sigmas must be > 0");
+  }
+}
+
 void TrainingOptions::Validate() const {
   if (spacing < 1) throw std::invalid_argument("training.spacing must be >= 1");
 }

@@ -25,13 +25,18 @@ namespace {
 using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 
 constexpr char kUsage[] =
-    "usage: run_dataset ASL_DIR [--config FILE] [--output DIR] [--quiet]\n"
-    "Runs the stereo odometry on an EuRoC sequence and writes to DIR (default output/<name>):\n"
-    "  trajectory.txt  TUM, rectified left camera in the world frame, every frame\n"
-    "  keyframes.txt   TUM, keyframes after the last optimisation\n"
+    "usage: run_dataset ASL_DIR [--config FILE] [--fabmap-config FILE] [--no-loop-closing]\n"
+    "                   [--output DIR] [--quiet]\n"
+    "Runs the stereo SLAM on an EuRoC sequence and writes to DIR (default output/<name>):\n"
+    "  trajectory.txt  TUM, rectified left camera in the map frame (after loop closing), every "
+    "frame\n"
+    "  odometry.txt    TUM, the same from the odometry alone (no loop closing)\n"
+    "  keyframes.txt   TUM, keyframes in the map frame after the last optimisation\n"
+    "  loops.csv       every verified loop candidate, accepted or not, with the reason\n"
     "  timing.csv      milliseconds per frame and stage\n"
     "  summary.json    counts, times, and ATE against ground truth when the sequence has it\n"
-    "Default config: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml\n";
+    "Default configs: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml, " STEREO_FABMAP_SLAM_CONFIG_DIR
+    "/fabmap.yaml\n";
 
 double NowMs() {
   return std::chrono::duration<double, std::milli>(
@@ -65,19 +70,51 @@ double PeakResidentMegabytes() {
   return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
 }
 
+struct LoopCounts {
+  int accepted = 0, rejected = 0;
+  std::vector<double> detection_ms;  // per keyframe
+  double pose_graph_ms_max = 0;
+};
+
+// One row per verified candidate; times in seconds as in the trajectory files.
+LoopCounts WriteLoops(const pipeline::StereoOdometry& odometry, const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (file == nullptr) throw std::runtime_error("cannot write " + path);
+  std::fprintf(file,
+               "query_keyframe,query_time,match_keyframe,match_time,probability,inliers,accepted,"
+               "reason\n");
+  LoopCounts counts;
+  for (const pipeline::FrameRecord& frame : odometry.frames()) {
+    if (!frame.loop_detection) continue;
+    counts.detection_ms.push_back(frame.timing.loop_detection_ms);
+    counts.pose_graph_ms_max = std::max(counts.pose_graph_ms_max, frame.timing.pose_graph_ms);
+    for (const place_recognition::LoopCandidate& c : frame.loop_detection->candidates) {
+      std::fprintf(file, "%ld,%.9f,%ld,%.9f,%.6f,%d,%d,\"%s\"\n",
+                   static_cast<long>(frame.loop_detection->query_id), frame.timestamp,
+                   static_cast<long>(c.keyframe_id), odometry.KeyframeTime(c.keyframe_id),
+                   c.probability, c.inliers, c.accepted ? 1 : 0, c.reason.c_str());
+      ++(c.accepted ? counts.accepted : counts.rejected);
+    }
+  }
+  std::fclose(file);
+  return counts;
+}
+
 void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::string& path) {
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (file == nullptr) throw std::runtime_error("cannot write " + path);
   std::fprintf(file,
                "frame,timestamp,state,keyframe,rectification_ms,detection_ms,description_ms,"
-               "stereo_ms,tracking_ms,bundle_adjustment_ms,inliers,note\n");
+               "stereo_ms,tracking_ms,bundle_adjustment_ms,place_description_ms,"
+               "loop_detection_ms,pose_graph_ms,inliers,note\n");
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const pipeline::FrameRecord& f = frames[i];
     const pipeline::FrameTiming& t = f.timing;
-    std::fprintf(file, "%zu,%.9f,%s,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,\"%s\"\n", i, f.timestamp,
-                 odometry::TrackingStateName(f.state), f.is_keyframe ? 1 : 0, t.rectification_ms,
-                 t.detection_ms, t.description_ms, t.stereo_ms, t.tracking_ms,
-                 t.bundle_adjustment_ms, f.inliers, f.note.c_str());
+    std::fprintf(file, "%zu,%.9f,%s,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,\"%s\"\n", i,
+                 f.timestamp, odometry::TrackingStateName(f.state), f.is_keyframe ? 1 : 0,
+                 t.rectification_ms, t.detection_ms, t.description_ms, t.stereo_ms, t.tracking_ms,
+                 t.bundle_adjustment_ms, t.place_description_ms, t.loop_detection_ms,
+                 t.pose_graph_ms, f.inliers, f.note.c_str());
   }
   std::fclose(file);
 }
@@ -87,8 +124,8 @@ void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::st
 int main(int argc, char** argv) {
   std::optional<tools::CommandLine> args;
   try {
-    args.emplace(argc, argv, std::set<std::string>{"config", "output"},
-                 std::set<std::string>{"quiet", "help"});
+    args.emplace(argc, argv, std::set<std::string>{"config", "fabmap-config", "output"},
+                 std::set<std::string>{"quiet", "help", "no-loop-closing"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -107,7 +144,16 @@ int main(int argc, char** argv) {
     const std::string output = args->ValueOr("output", "output/" + name);
     const bool quiet = args->Flag("quiet");
 
-    const tools::SlamConfiguration options = tools::SlamConfiguration::Load(config);
+    tools::SlamConfiguration options = tools::SlamConfiguration::Load(config);
+    const bool loop_closing = !args->Flag("no-loop-closing");
+    const std::string fabmap_config =
+        args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml");
+    std::optional<place_recognition::PlaceRecognitionOptions> place_options;
+    if (loop_closing) {
+      place_options =
+          place_recognition::LoadPlaceRecognitionOptions(fabmap_config, options.front_end.features);
+      options.front_end.place_features = place_options->features;
+    }
     const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
     const camera::StereoRectifier rectifier =
         camera::StereoRectifier::FromCalibration(sequence.calibration(), options.rectification);
@@ -124,6 +170,12 @@ int main(int argc, char** argv) {
 
     pipeline::StereoOdometry odometry(options.front_end, options.bundle_adjustment, rectifier,
                                       NowMs);
+    if (loop_closing) {
+      odometry.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
+                                     *place_options, options.loop_detection, rectifier.camera(),
+                                     odometry.descriptor_norm(), odometry.max_match_distance()),
+                                 options.pose_graph);
+    }
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
@@ -141,8 +193,11 @@ int main(int argc, char** argv) {
     const double wall_s = (NowMs() - wall_start) / 1000.0;
     const double cpu_s = CpuSeconds() - cpu_start;
 
-    const evaluation::Trajectory trajectory = odometry.CameraTrajectory();
+    const evaluation::Trajectory trajectory = odometry.MapTrajectory();
+    const evaluation::Trajectory odometry_trajectory = odometry.CameraTrajectory();
     evaluation::WriteTumTrajectory(trajectory, output + "/trajectory.txt");
+    evaluation::WriteTumTrajectory(odometry_trajectory, output + "/odometry.txt");
+    const LoopCounts loops = WriteLoops(odometry, output + "/loops.csv");
     evaluation::WriteTumTrajectory(odometry.KeyframeTrajectory(), output + "/keyframes.txt");
     WriteTiming(odometry.frames(), output + "/timing.csv");
 
@@ -181,12 +236,23 @@ int main(int argc, char** argv) {
                     names[k], s.median, names[k], s.mean);
       json += buffer;
     }
+    std::snprintf(buffer, sizeof(buffer),
+                  ", \"loop_closing\": %s, \"loops_accepted\": %d, \"loops_rejected\": %d, "
+                  "\"loop_detection_ms_median\": %.3f, \"pose_graph_ms_max\": %.3f",
+                  loop_closing ? "true" : "false", loops.accepted, loops.rejected,
+                  Summarise(loops.detection_ms).median, loops.pose_graph_ms_max);
+    json += buffer;
     if (sequence.has_ground_truth()) {
       // Ground truth is the body frame: move it to the rectified left camera we estimate.
       const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
           sequence.ground_truth(), rectifier.T_body_rectified_left());
       const evaluation::EvaluationResult result =
           evaluation::EvaluateTrajectory(truth, trajectory, evaluation::EvaluationOptions{});
+      const evaluation::EvaluationResult odometry_result = evaluation::EvaluateTrajectory(
+          truth, odometry_trajectory, evaluation::EvaluationOptions{});
+      std::snprintf(buffer, sizeof(buffer), ", \"ate_rmse_odometry\": %.6f",
+                    odometry_result.ate.rmse);
+      json += buffer;
       const auto& est = result.aligned_estimate;
       const auto& ref = result.matched_reference;
       const Eigen::Vector3d est_move =

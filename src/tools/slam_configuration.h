@@ -6,6 +6,7 @@
 #include "stereo_fabmap_slam/backend/backend_options.h"
 #include "stereo_fabmap_slam/camera/camera_options.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
 namespace stereo_fabmap_slam::tools {
 
@@ -15,12 +16,16 @@ struct SlamConfiguration {
   camera::RectificationOptions rectification;
   pipeline::FrontEndOptions front_end;
   backend::BundleAdjustmentOptions bundle_adjustment;
+  place_recognition::LoopDetectorOptions loop_detection;
+  backend::PoseGraphOptions pose_graph;
 
   template <typename Visit>
   void ForEachModule(Visit visit) {
     visit(rectification);
     front_end.ForEachModule(visit);
     visit(bundle_adjustment);
+    visit(loop_detection);
+    visit(pose_graph);
   }
 
   // Reads and validates every section; unknown sections and keys, and bad values, throw

@@ -1,6 +1,5 @@
 // The offline runner on real data, run as a user runs it: a regression guard on accuracy and
 // on determinism (the same input gives the same output, byte for byte).
-#include <regex>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -10,15 +9,6 @@
 
 namespace stereo_fabmap_slam::test {
 namespace {
-
-double JsonNumber(const std::string& json, const std::string& key) {
-  std::smatch match;
-  if (!std::regex_search(json, match, std::regex("\"" + key + "\": ([-0-9.eE+]+)"))) {
-    ADD_FAILURE() << key << " not in " << json;
-    return -1;
-  }
-  return std::stod(match[1]);
-}
 
 TEST(RunDataset, Mh01IsTrackedAccuratelyAndDeterministically) {
   const std::string asl = EurocSequencePath("MH01_first10s");

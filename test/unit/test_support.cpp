@@ -8,8 +8,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
+
+#include <gtest/gtest.h>
 
 namespace stereo_fabmap_slam::test {
 
@@ -71,6 +74,15 @@ int RunCommand(const std::string& command, std::string* output) {
     output->append(buffer.data(), n);
   const int status = pclose(pipe);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+double JsonNumber(const std::string& json, const std::string& key) {
+  std::smatch match;
+  if (!std::regex_search(json, match, std::regex("\"" + key + "\": ([-0-9.eE+]+)"))) {
+    ADD_FAILURE() << key << " not in " << json;
+    return -1;
+  }
+  return std::stod(match[1]);
 }
 
 }  // namespace stereo_fabmap_slam::test

@@ -31,4 +31,8 @@ bool CopyTree(const std::string& from, const std::string& to);
 // Runs a shell command, returns its exit status and fills *output with stdout.
 int RunCommand(const std::string& command, std::string* output);
 
+// The number after "key": in a one-line JSON object (run_dataset's summary.json); records a test
+// failure and returns -1 if the key is missing.
+double JsonNumber(const std::string& json, const std::string& key);
+
 }  // namespace stereo_fabmap_slam::test

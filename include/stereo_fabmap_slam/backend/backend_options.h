@@ -18,4 +18,32 @@ struct BundleAdjustmentOptions {
   void Validate() const;
 };
 
+struct PoseGraphOptions {
+  static constexpr char kSection[] = "pose_graph";
+
+  // Noise of the odometry between consecutive keyframes. Stereo odometry with local bundle
+  // adjustment drifts about 1 % of the distance travelled and keyframes are some 0.2 - 1 m apart,
+  // i.e. millimetres to a centimetre per edge: 2 cm leaves room for the worse steps (fast motion,
+  // few features) without letting a loop edge of centimetre accuracy be outvoted by a long chain.
+  double odometry_translation_sigma = 0.02;  // [m]
+  // Heading error is what turns into most of the position drift; 0.1 degrees per keyframe random
+  // walks to ~1 degree over 100 keyframes, what stereo odometry shows over a few tens of metres.
+  double odometry_rotation_sigma_deg = 0.1;  // [deg]
+  // Cauchy loss on loop edges, in units of the whitened residual (standard deviations). Cauchy
+  // rather than Huber because its pull falls off as 1/residual: a wrong loop that survived
+  // place recognition and geometric verification (repeated structure) ends up metres, i.e.
+  // hundreds of sigmas, away and then barely pulls, where Huber would still pull with a constant
+  // force. 3.5 is the 95 % quantile of a 6-dof chi-square (sqrt(12.6)): correct loops after
+  // convergence lie mostly inside it and keep nearly full weight. The flip side: a correct loop
+  // that disagrees with the odometry by many combined sigmas is treated as wrong too, so the
+  // odometry sigmas must not be set far below the real drift.
+  double loop_loss_scale = 3.5;
+  // Levenberg-Marquardt iterations an Optimize(); from the previous solution a new loop needs a
+  // handful, closing many loops over a long drift at once about 10.
+  int iterations = 30;
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
 }  // namespace stereo_fabmap_slam::backend

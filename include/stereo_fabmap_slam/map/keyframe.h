@@ -23,6 +23,10 @@ struct Keyframe {
   std::vector<std::int64_t> map_point_ids;
   // Tracking was lost before this keyframe: it starts a new map, unrelated to earlier keyframes.
   bool starts_new_map = false;
+  // Place recognition's descriptors of the left image (its own key point selection, the
+  // vocabulary's descriptor type: CV_8U binary or CV_32F), one per row; computed once by the
+  // front end so that loop detection needs nothing but the keyframe.
+  cv::Mat place_descriptors;
 };
 
 }  // namespace stereo_fabmap_slam::map

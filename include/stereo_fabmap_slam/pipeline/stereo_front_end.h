@@ -1,6 +1,8 @@
 #pragma once
 
 #include <functional>
+#include <memory>
+#include <optional>
 
 #include <opencv2/core.hpp>
 
@@ -9,6 +11,7 @@
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 #include "stereo_fabmap_slam/odometry/odometry_options.h"
 #include "stereo_fabmap_slam/odometry/tracker.h"
+#include "stereo_fabmap_slam/place_recognition/image_describer.h"
 
 namespace stereo_fabmap_slam::pipeline {
 
@@ -18,6 +21,9 @@ struct FrontEndOptions {
   features::StereoMatcherOptions stereo;
   odometry::TrackerOptions tracker;
   odometry::KeyframePolicyOptions keyframes;
+  // Place recognition's detector selection (config/fabmap.yaml): when set, every keyframe
+  // carries place descriptors of its rectified left image, computed once here.
+  std::optional<features::FeatureOptions> place_features;
 
   // Calls visit(options) for each module's options, e.g. to read, validate or print them all.
   template <typename Visit>
@@ -32,7 +38,8 @@ struct FrontEndOptions {
 // Milliseconds spent per stage of one frame.
 struct FrameTiming {
   double rectification_ms = 0, detection_ms = 0, description_ms = 0, stereo_ms = 0, tracking_ms = 0,
-         bundle_adjustment_ms = 0;
+         place_description_ms = 0, bundle_adjustment_ms = 0, loop_detection_ms = 0,
+         pose_graph_ms = 0;
   // Detection to refined pose: what a frame costs before the next one can be tracked.
   double TrackingTotal() const { return detection_ms + description_ms + stereo_ms + tracking_ms; }
 };
@@ -58,12 +65,15 @@ class StereoFrontEnd {
   void Reset() { tracker_.Reset(); }
 
   const geometry::StereoCamera& camera() const { return rectifier_.camera(); }
+  int descriptor_norm() const { return extractor_.descriptor_norm(); }
+  double max_match_distance() const { return extractor_.max_match_distance(); }
 
  private:
   camera::StereoRectifier rectifier_;
   Clock clock_;
   features::StereoFeatureExtractor extractor_;
   odometry::Tracker tracker_;
+  std::unique_ptr<place_recognition::ImageDescriber> place_describer_;  // null: no places
 };
 
 }  // namespace stereo_fabmap_slam::pipeline

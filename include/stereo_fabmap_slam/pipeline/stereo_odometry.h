@@ -10,6 +10,7 @@
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/evaluation/trajectory.h"
+#include "stereo_fabmap_slam/pipeline/loop_closing.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 
 namespace stereo_fabmap_slam::pipeline {
@@ -24,6 +25,7 @@ struct FrameRecord {
   int inliers = 0;   // map points tracked
   std::string note;  // the tracker's reason: why weak/lost, why a keyframe
   FrameTiming timing;
+  std::optional<place_recognition::LoopDetection> loop_detection;  // keyframes, loop closing on
 };
 
 // The whole odometry in one thread, frame by frame: the front end, and on a keyframe the
@@ -37,20 +39,32 @@ class StereoOdometry {
                  const backend::BundleAdjustmentOptions& bundle_adjustment_options,
                  const camera::StereoRectifier& rectifier, Clock clock);
 
+  // Turns loop closing on (before the first frame). The front end must make place descriptors
+  // (FrontEndOptions::place_features).
+  void EnableLoopClosing(place_recognition::LoopDetector detector,
+                         const backend::PoseGraphOptions& pose_graph_options);
+
   // Raw (unrectified) mono8 images of one stereo pair.
   const FrameRecord& ProcessFrame(double timestamp, const cv::Mat& left_raw,
                                   const cv::Mat& right_raw);
 
-  // Every frame's rectified left camera pose, through its keyframe's latest optimised pose.
+  // Every frame's rectified left camera pose, through its keyframe's latest optimised pose: in
+  // odom (the odometry, without loop closing) and in map (after loop closing; the same as the
+  // odometry while no loop was closed or loop closing is off).
   evaluation::Trajectory CameraTrajectory() const;
+  evaluation::Trajectory MapTrajectory() const;
   evaluation::Trajectory KeyframeTrajectory() const;
   const std::vector<FrameRecord>& frames() const { return frames_; }
+  double KeyframeTime(std::int64_t id) const { return keyframe_times_.at(id); }
+  int descriptor_norm() const { return front_end_.descriptor_norm(); }
+  double max_match_distance() const { return front_end_.max_match_distance(); }
   std::size_t keyframe_count() const { return keyframe_times_.size(); }
 
  private:
   Clock clock_;
   StereoFrontEnd front_end_;
   backend::LocalBundleAdjuster bundle_adjuster_;
+  std::optional<LoopClosing> loop_closing_;
   std::vector<FrameRecord> frames_;
   std::map<std::int64_t, double> keyframe_times_;
 };

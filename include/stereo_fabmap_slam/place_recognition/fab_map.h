@@ -64,6 +64,10 @@ class FabMap {
   // place; `place` receives which.
   FabMapResult Add(const std::vector<int>& words, int* place = nullptr);
 
+  // Adds the words as a new place, never merged with an existing one (the SLAM map keeps one
+  // place per keyframe); returns its index.
+  int AddPlace(const std::vector<int>& words);
+
   const PlaceDatabase& places() const { return places_.database; }
   // Replaces the map's places (e.g. loaded from a file).
   void SetPlaces(PlaceDatabase places);

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "stereo_fabmap_slam/features/features_options.h"
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 
 namespace stereo_fabmap_slam::place_recognition {
@@ -53,6 +54,55 @@ struct TrainingOptions {
   int spacing = 10;  // train_fabmap: every N-th frame of a sequence, so that views are distinct
 
   void Visit(io::OptionVisitor& visitor) { visitor.Visit("spacing", &spacing); }
+  void Validate() const;  // throws std::invalid_argument
+};
+
+// Loop detection in the running system: which keyframes FAB-MAP may propose, and how a proposal
+// is verified. The thresholds are for precision first: one false loop wrecks a map, a missed
+// one only leaves drift until the next revisit.
+struct LoopDetectorOptions {
+  static constexpr char kSection[] = "loop_detection";
+
+  // Keyframes younger than this (relative to the query) are not places to return to: the
+  // odometry already connects them. 10 s is several keyframes at walking or flying speed and
+  // far shorter than any lap worth closing.
+  double min_age = 10.0;  // [s]
+  // FAB-MAP candidates: the best few whose posterior reaches min_probability. Consecutive
+  // keyframes of one old place share the posterior mass, so a true revisit often shows as
+  // several candidates of 0.1 - 0.5 each; verification, not this threshold, gives precision.
+  double min_probability = 0.05;
+  int max_candidates = 3;
+  // Geometric verification: query key points matched by descriptor to the candidate's stereo
+  // points (nearest / second nearest < match_ratio), PnP RANSAC, motion-only refinement.
+  double match_ratio = 0.8;
+  geometry::PnpKernel pnp_kernel = geometry::PnpKernel::kAp3p;
+  double ransac_threshold = 2.0;  // [px]
+  int ransac_iterations = 300;    // no motion prior: inlier ratios can be low
+  // Accept only with this many inliers after refinement (the tracker calls 50 good tracking)...
+  int min_inliers = 40;
+  // ...spread over at least this many cells of a 4 x 4 grid over the image, so that a single
+  // textured object (a poster repeated elsewhere in the building) cannot verify a loop alone.
+  int min_inlier_cells = 6;
+  // Within one odometry segment the verified relative pose must agree with the odometry's up to
+  // the drift the odometry can have gathered between the two keyframes: max_drift_fraction of
+  // the path travelled between them, and never less than min_drift_allowance. Stereo odometry
+  // drifts ~1 % of the distance; 5 % leaves a wide margin yet rejects a look-alike place metres
+  // away after a short path.
+  double max_drift_fraction = 0.05;
+  double min_drift_allowance = 0.3;    // [m]
+  double max_rotation_drift_deg = 10;  // [deg] heading the odometry cannot have lost
+  // Only loops between nearby views: the farther apart two cameras are, the less near
+  // structure they share and the worse PnP measures their relative pose. Keyframes are at most
+  // 0.25 m apart along the path (keyframes.max_translation), so a true revisit passes within
+  // about 0.15 m of an old keyframe; 0.8 m leaves room for a path some decimetres off the old
+  // one, and a farther candidate is no loss: a nearer keyframe of the same place follows.
+  double max_loop_distance = 0.8;  // [m] verified distance between the two cameras
+  // Uncertainty of a verified relative pose for the pose graph: PnP + refinement on >= 40 stereo
+  // inliers at indoor depths is good to about a centimetre and a tenth of a degree; twice that.
+  double translation_sigma = 0.02;  // [m]
+  double rotation_sigma_deg = 0.2;  // [deg]
+
+  void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
 };
 

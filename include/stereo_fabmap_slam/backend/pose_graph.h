@@ -1,0 +1,115 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/map/loop_edge.h"
+
+namespace stereo_fabmap_slam::backend {
+
+enum class PoseGraphEdgeType { kOdometry, kLoop };
+
+struct PoseGraphEdge {
+  std::int64_t from = -1;
+  std::int64_t to = -1;
+  Eigen::Isometry3d T_from_to = Eigen::Isometry3d::Identity();
+  // Order (translation, rotation) of geometry::RelativePoseError's residual.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
+  PoseGraphEdgeType type = PoseGraphEdgeType::kOdometry;
+};
+
+struct PoseGraphSummary {
+  bool converged = true;
+  int iterations = 0;       // 0: nothing to optimise (no loop edges)
+  double initial_cost = 0;  // Ceres' cost, half the sum of squared whitened (robustified) errors
+  double final_cost = 0;
+};
+
+// Keyframe poses in a map frame made consistent by loop closures. Nodes: keyframes, whose
+// poses T_map_camera are optimised. Edges: odometry between consecutive keyframes of a segment
+// (what the tracker measured, from the latest odometry poses) and loop edges (verified
+// revisits, with a Cauchy loss). Segments are runs of keyframes with unbroken tracking; loop
+// edges join them into components, each with its own gauge: its oldest keyframe stays fixed.
+// A component without loops has nothing to correct: its poses are its odometry poses under the
+// fixed correction it was started with, and Optimize() leaves it out of the problem.
+// Not thread-safe; no clock, no global state.
+class PoseGraph {
+ public:
+  explicit PoseGraph(const PoseGraphOptions& options);  // throws std::invalid_argument
+
+  // Keyframes arrive in increasing id order with their pose in the odometry frame (odom).
+  // starts_new_segment: tracking was lost before it; no odometry edge joins it to the previous
+  // keyframe, so it begins a new, unconnected segment until a loop edge joins the segments.
+  // Its map pose: the previous keyframe's map pose times the odometry step, or for a new segment
+  // MapToOdom() * T_odom_camera. Throws std::invalid_argument if id is not above the last.
+  void AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_camera,
+                   bool starts_new_segment);
+  // Bundle adjustment moved a keyframe in odom: the odometry edges touching it follow (at the
+  // next Optimize(), or at once in a component without loops). Throws for unknown ids.
+  void UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera);
+  // Throws std::invalid_argument for unknown ids, a loop of a keyframe with itself, or an
+  // information matrix that is not symmetric positive definite. A loop joining two components
+  // moves the younger one rigidly onto the older one through this edge at once, so that the edge
+  // starts the optimisation satisfied instead of hundreds of sigmas off, where its robust loss
+  // would ignore it.
+  void AddLoop(const map::LoopEdge& loop);
+  // Optimises the components that have loops, from the current map poses.
+  PoseGraphSummary Optimize();
+
+  bool Contains(std::int64_t id) const;
+  Eigen::Isometry3d MapPose(std::int64_t id) const;  // T_map_camera; throws for unknown ids
+  std::map<std::int64_t, Eigen::Isometry3d> MapPoses() const;
+  // T_map_odom: the correction of the newest keyframe, map pose * odom pose^-1, what a ROS
+  // backend broadcasts as tf map -> odom. Identity while the graph is empty.
+  Eigen::Isometry3d MapToOdom() const;
+  // Odometry edges (from the latest odometry poses), then loop edges (from: match, to: query).
+  std::vector<PoseGraphEdge> Edges() const;
+  std::size_t size() const { return keyframes_.size(); }
+
+ private:
+  struct Keyframe {
+    std::int64_t id;
+    int segment;
+    Eigen::Isometry3d T_odom_camera;
+    // T_map_camera, kept as Ceres parameter blocks so that Optimize() starts from the last
+    // solution and writes into place.
+    Eigen::Quaterniond q_map_camera;
+    Eigen::Vector3d t_map_camera;
+
+    Eigen::Isometry3d MapPose() const;
+    void SetMapPose(const Eigen::Isometry3d& T_map_camera);
+  };
+  struct Loop {
+    std::size_t match, query;  // indices into keyframes_
+    Eigen::Isometry3d T_match_query;
+    Eigen::Matrix<double, 6, 6> information;
+    Eigen::Matrix<double, 6, 6> sqrt_information;
+  };
+  struct Segment {
+    std::size_t first;  // index of its first keyframe
+    // Union-find over segments: components are segments joined by loops. The root is the
+    // oldest segment of the component, whose first keyframe is the component's gauge.
+    int parent;
+    int loops;  // loop edges in the component (valid at the root)
+    // Map pose = T_map_odom * odometry pose while the component has no loops.
+    Eigen::Isometry3d T_map_odom;
+  };
+
+  std::size_t IndexOf(std::int64_t id) const;  // throws std::invalid_argument
+  int ComponentOf(int segment) const;          // the root segment
+
+  PoseGraphOptions options_;
+  Eigen::Matrix<double, 6, 6> odometry_information_;
+  Eigen::Matrix<double, 6, 6> odometry_sqrt_information_;
+  std::vector<Keyframe> keyframes_;  // by increasing id
+  std::vector<Loop> loops_;
+  std::vector<Segment> segments_;
+};
+
+}  // namespace stereo_fabmap_slam::backend

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+
+#include "stereo_fabmap_slam/backend/pose_graph.h"
+#include "stereo_fabmap_slam/map/keyframe.h"
+#include "stereo_fabmap_slam/map/keyframe_update.h"
+#include "stereo_fabmap_slam/place_recognition/loop_detector.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+
+namespace stereo_fabmap_slam::pipeline {
+
+struct LoopClosingOutput {
+  place_recognition::LoopDetection detection;
+  bool optimised = false;
+  double detection_ms = 0;   // FAB-MAP and verification
+  double pose_graph_ms = 0;  // optimisation after an accepted loop
+};
+
+// The loop-closing stage: each keyframe (after its bundle adjustment) becomes a place; a
+// verified revisit becomes a loop edge of the pose graph, which is then optimised. Keyframe
+// poses in `map` and the map -> odom correction come from here; odometry stays as it was.
+class LoopClosing {
+ public:
+  using Clock = std::function<double()>;  // milliseconds, only read to fill the timings
+
+  LoopClosing(place_recognition::LoopDetector detector,
+              const backend::PoseGraphOptions& pose_graph_options, Clock clock);
+
+  // Loads the vocabulary, Chow-Liu tree and (for the sampling model) training places of
+  // options.vocabulary_directory; throws io::InputError for missing or damaged files.
+  static place_recognition::LoopDetector LoadDetector(
+      const place_recognition::PlaceRecognitionOptions& options,
+      const place_recognition::LoopDetectorOptions& detector_options,
+      const geometry::StereoCamera& camera, int descriptor_norm, double max_descriptor_distance);
+
+  // `update` is what the bundle adjustment changed when it added `keyframe` (odom frame).
+  LoopClosingOutput Process(const map::Keyframe& keyframe, const map::KeyframeUpdate& update);
+
+  const backend::PoseGraph& pose_graph() const { return pose_graph_; }
+  const place_recognition::LoopDetector& detector() const { return detector_; }
+
+ private:
+  place_recognition::LoopDetector detector_;
+  backend::PoseGraph pose_graph_;
+  Clock clock_;
+};
+
+}  // namespace stereo_fabmap_slam::pipeline

@@ -1,0 +1,85 @@
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
+#include "stereo_fabmap_slam/map/keyframe.h"
+#include "stereo_fabmap_slam/map/keyframe_database.h"
+#include "stereo_fabmap_slam/map/loop_edge.h"
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/place_recognition/vocabulary.h"
+
+namespace stereo_fabmap_slam::place_recognition {
+
+// One keyframe FAB-MAP proposed, and what verification made of it.
+struct LoopCandidate {
+  std::int64_t keyframe_id = -1;
+  double probability = 0;  // FAB-MAP posterior
+  int matches = 0;         // descriptor matches to its stereo points
+  int inliers = 0;         // after RANSAC and refinement
+  bool accepted = false;
+  std::string reason;  // why rejected; "accepted" otherwise
+  map::LoopEdge edge;  // meaningful if accepted
+};
+
+struct LoopDetection {
+  std::int64_t query_id = -1;
+  double new_place_probability = 1;
+  std::vector<LoopCandidate> candidates;  // best FAB-MAP posterior first
+  // The accepted candidate with the most inliers, if any.
+  std::optional<map::LoopEdge> loop;
+};
+
+// Loop detection over the keyframe map: every keyframe becomes one FAB-MAP place (addressed by
+// keyframe id, never merged), and each new keyframe is compared with the places older than
+// `min_age`; the best candidates are verified geometrically against the candidate's stereo
+// points. Owns the KeyframeDatabase, the one store of keyframes that relocalization reads too.
+class LoopDetector {
+ public:
+  // `descriptor_norm` and `max_descriptor_distance` describe the odometry's descriptors (the
+  // keyframes' features). Throws std::invalid_argument for bad options.
+  LoopDetector(const LoopDetectorOptions& options, Vocabulary vocabulary, FabMap fabmap,
+               const geometry::StereoCamera& camera, int descriptor_norm,
+               double max_descriptor_distance);
+
+  // The keyframe's place words. Throws std::invalid_argument when its place descriptors are not
+  // of the vocabulary's type and size (a keyframe from another configuration).
+  std::vector<int> Words(const map::Keyframe& keyframe) const;
+
+  // Looks for a loop of a new keyframe, then (if add_to_map) adds it to the map.
+  LoopDetection Process(map::Keyframe keyframe, bool add_to_map = true);
+  // The same query for a keyframe already in the map (std::out_of_range for an unknown id).
+  LoopDetection DetectStored(std::int64_t keyframe_id);
+
+  // The bundle adjustment moved a keyframe (odom frame).
+  void UpdatePose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
+    database_.UpdatePose(id, T_odom_camera);
+  }
+  const map::KeyframeDatabase& database() const { return database_; }
+  std::size_t places() const { return place_keyframes_.size(); }
+
+ private:
+  LoopDetection Detect(const map::StoredKeyframe& query, double query_time, int query_segment,
+                       double query_path);
+  // Keyframes at least min_age older than `time` become FAB-MAP places.
+  void AdmitPlaces(double time);
+  LoopCandidate Verify(const map::StoredKeyframe& query, int query_segment, double query_path,
+                       const map::StoredKeyframe& candidate) const;
+
+  LoopDetectorOptions options_;
+  Vocabulary vocabulary_;
+  FabMap fabmap_;
+  geometry::StereoCamera camera_;
+  int descriptor_norm_;
+  double max_descriptor_distance_;
+  map::KeyframeDatabase database_;
+  std::vector<std::int64_t> place_keyframes_;  // FAB-MAP place index -> keyframe id
+  std::deque<std::int64_t> waiting_;           // in the database, too recent to be places yet
+};
+
+}  // namespace stereo_fabmap_slam::place_recognition

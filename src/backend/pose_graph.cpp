@@ -1,0 +1,246 @@
+#include "stereo_fabmap_slam/backend/pose_graph.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <ceres/ceres.h>
+#include <Eigen/Cholesky>
+
+#include "stereo_fabmap_slam/geometry/relative_pose_error.h"
+
+namespace stereo_fabmap_slam::backend {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+Eigen::Isometry3d PoseGraph::Keyframe::MapPose() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q_map_camera.toRotationMatrix();
+  T.translation() = t_map_camera;
+  return T;
+}
+
+void PoseGraph::Keyframe::SetMapPose(const Eigen::Isometry3d& T_map_camera) {
+  q_map_camera = Eigen::Quaterniond(T_map_camera.rotation()).normalized();
+  t_map_camera = T_map_camera.translation();
+}
+
+PoseGraph::PoseGraph(const PoseGraphOptions& options) : options_((options.Validate(), options)) {
+  const double rotation_sigma = options_.odometry_rotation_sigma_deg * kPi / 180.0;
+  Eigen::Matrix<double, 6, 1> inverse_sigma;
+  inverse_sigma << Eigen::Vector3d::Constant(1.0 / options_.odometry_translation_sigma),
+      Eigen::Vector3d::Constant(1.0 / rotation_sigma);
+  odometry_sqrt_information_ = inverse_sigma.asDiagonal();
+  odometry_information_ = inverse_sigma.cwiseAbs2().asDiagonal();
+}
+
+void PoseGraph::AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_camera,
+                            bool starts_new_segment) {
+  if (!keyframes_.empty() && id <= keyframes_.back().id) {
+    throw std::invalid_argument("PoseGraph::AddKeyframe: id " + std::to_string(id) +
+                                " is not above the last, " + std::to_string(keyframes_.back().id));
+  }
+  Keyframe keyframe;
+  keyframe.id = id;
+  keyframe.T_odom_camera = T_odom_camera;
+  if (keyframes_.empty() || starts_new_segment) {
+    // Nothing relates the new odometry frame to the old one; the newest correction is the best
+    // guess there is, and it keeps the map pose continuous when odometry itself did not restart.
+    const Eigen::Isometry3d T_map_odom = MapToOdom();
+    keyframe.segment = static_cast<int>(segments_.size());
+    segments_.push_back({keyframes_.size(), keyframe.segment, 0, T_map_odom});
+    keyframe.SetMapPose(T_map_odom * T_odom_camera);
+  } else {
+    const Keyframe& previous = keyframes_.back();
+    keyframe.segment = previous.segment;
+    const Segment& component = segments_[ComponentOf(keyframe.segment)];
+    if (component.loops == 0) {
+      // Exactly the odometry pose under the segment's correction, without rounding piling up.
+      keyframe.SetMapPose(component.T_map_odom * T_odom_camera);
+    } else {
+      // Corrected like its predecessor, so it is consistent before the next optimisation.
+      keyframe.SetMapPose(previous.MapPose() * (previous.T_odom_camera.inverse() * T_odom_camera));
+    }
+  }
+  keyframes_.push_back(keyframe);
+}
+
+void PoseGraph::UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
+  Keyframe& keyframe = keyframes_[IndexOf(id)];
+  keyframe.T_odom_camera = T_odom_camera;
+  const Segment& component = segments_[ComponentOf(keyframe.segment)];
+  if (component.loops == 0) keyframe.SetMapPose(component.T_map_odom * T_odom_camera);
+}
+
+void PoseGraph::AddLoop(const map::LoopEdge& edge) {
+  Loop loop;
+  loop.match = IndexOf(edge.match_id);
+  loop.query = IndexOf(edge.query_id);
+  if (loop.match == loop.query) {
+    throw std::invalid_argument("PoseGraph::AddLoop: keyframe " + std::to_string(edge.query_id) +
+                                " cannot close a loop with itself");
+  }
+  loop.T_match_query = edge.T_match_query;
+  loop.information = edge.information;
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> cholesky(edge.information);
+  if (!edge.information.allFinite() || !edge.information.isApprox(edge.information.transpose()) ||
+      cholesky.info() != Eigen::Success) {
+    throw std::invalid_argument(
+        "PoseGraph::AddLoop: information of the loop " + std::to_string(edge.match_id) + " -> " +
+        std::to_string(edge.query_id) + " is not symmetric positive definite");
+  }
+  // information = L * L^T, so S = L^T gives |S * e|^2 = e^T * information * e.
+  loop.sqrt_information = cholesky.matrixU();
+
+  const int match_component = ComponentOf(keyframes_[loop.match].segment);
+  const int query_component = ComponentOf(keyframes_[loop.query].segment);
+  int component = match_component;
+  if (match_component != query_component) {
+    // The younger component (higher root) moves, so the older one keeps its gauge.
+    const int moving = std::max(match_component, query_component);
+    component = std::min(match_component, query_component);
+    const Keyframe& match = keyframes_[loop.match];
+    const Keyframe& query = keyframes_[loop.query];
+    // Correction taking the moving keyframe of the edge to where the edge puts it.
+    const Eigen::Isometry3d correction =
+        moving == query_component
+            ? match.MapPose() * loop.T_match_query * query.MapPose().inverse()
+            : query.MapPose() * loop.T_match_query.inverse() * match.MapPose().inverse();
+    for (Keyframe& keyframe : keyframes_) {
+      if (ComponentOf(keyframe.segment) == moving) {
+        keyframe.SetMapPose(correction * keyframe.MapPose());
+      }
+    }
+    segments_[moving].parent = component;
+    segments_[component].loops += segments_[moving].loops;
+  }
+  ++segments_[component].loops;
+  loops_.push_back(loop);
+}
+
+PoseGraphSummary PoseGraph::Optimize() {
+  PoseGraphSummary result;
+  // Without loops every component follows its odometry, which the map poses already do.
+  if (loops_.empty()) return result;
+
+  // Shared by all residual blocks, hence not owned by the problem.
+  ceres::EigenQuaternionManifold quaternion_manifold;
+  ceres::CauchyLoss loop_loss(options_.loop_loss_scale);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+
+  std::vector<bool> optimised(segments_.size());
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    optimised[s] = segments_[ComponentOf(static_cast<int>(s))].loops > 0;
+  }
+  for (std::size_t i = 1; i < keyframes_.size(); ++i) {
+    Keyframe& a = keyframes_[i - 1];
+    Keyframe& b = keyframes_[i];
+    if (a.segment != b.segment || !optimised[b.segment]) continue;
+    problem.AddResidualBlock(
+        geometry::RelativePoseError::Create(a.T_odom_camera.inverse() * b.T_odom_camera,
+                                            odometry_sqrt_information_),
+        nullptr, a.q_map_camera.coeffs().data(), a.t_map_camera.data(),
+        b.q_map_camera.coeffs().data(), b.t_map_camera.data());
+  }
+  for (const Loop& loop : loops_) {
+    Keyframe& a = keyframes_[loop.match];
+    Keyframe& b = keyframes_[loop.query];
+    problem.AddResidualBlock(
+        geometry::RelativePoseError::Create(loop.T_match_query, loop.sqrt_information), &loop_loss,
+        a.q_map_camera.coeffs().data(), a.t_map_camera.data(), b.q_map_camera.coeffs().data(),
+        b.t_map_camera.data());
+  }
+  for (Keyframe& keyframe : keyframes_) {
+    double* rotation = keyframe.q_map_camera.coeffs().data();
+    if (problem.HasParameterBlock(rotation)) problem.SetManifold(rotation, &quaternion_manifold);
+  }
+  // Gauge: each component's oldest keyframe, the first of its root segment.
+  for (std::size_t s = 0; s < segments_.size(); ++s) {
+    if (segments_[s].parent != static_cast<int>(s) || segments_[s].loops == 0) continue;
+    Keyframe& oldest = keyframes_[segments_[s].first];
+    problem.SetParameterBlockConstant(oldest.q_map_camera.coeffs().data());
+    problem.SetParameterBlockConstant(oldest.t_map_camera.data());
+  }
+
+  ceres::Solver::Options solver_options;
+  // Each pose couples to its neighbours and a few loop partners: a very sparse normal matrix
+  // that a fill-reducing sparse Cholesky factors in a few milliseconds per iteration.
+  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver_options.max_num_iterations = options_.iterations;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+
+  for (Keyframe& keyframe : keyframes_) keyframe.q_map_camera.normalize();
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  result.initial_cost = summary.initial_cost;
+  result.final_cost = summary.final_cost;
+  return result;
+}
+
+bool PoseGraph::Contains(std::int64_t id) const {
+  const auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), id,
+                                   [](const Keyframe& k, std::int64_t i) { return k.id < i; });
+  return it != keyframes_.end() && it->id == id;
+}
+
+Eigen::Isometry3d PoseGraph::MapPose(std::int64_t id) const {
+  return keyframes_[IndexOf(id)].MapPose();
+}
+
+std::map<std::int64_t, Eigen::Isometry3d> PoseGraph::MapPoses() const {
+  std::map<std::int64_t, Eigen::Isometry3d> poses;
+  for (const Keyframe& keyframe : keyframes_) {
+    poses.emplace_hint(poses.end(), keyframe.id, keyframe.MapPose());
+  }
+  return poses;
+}
+
+Eigen::Isometry3d PoseGraph::MapToOdom() const {
+  if (keyframes_.empty()) return Eigen::Isometry3d::Identity();
+  const Keyframe& newest = keyframes_.back();
+  return newest.MapPose() * newest.T_odom_camera.inverse();
+}
+
+std::vector<PoseGraphEdge> PoseGraph::Edges() const {
+  std::vector<PoseGraphEdge> edges;
+  for (std::size_t i = 1; i < keyframes_.size(); ++i) {
+    const Keyframe& a = keyframes_[i - 1];
+    const Keyframe& b = keyframes_[i];
+    if (a.segment != b.segment) continue;
+    edges.push_back({a.id, b.id, a.T_odom_camera.inverse() * b.T_odom_camera, odometry_information_,
+                     PoseGraphEdgeType::kOdometry});
+  }
+  for (const Loop& loop : loops_) {
+    edges.push_back({keyframes_[loop.match].id, keyframes_[loop.query].id, loop.T_match_query,
+                     loop.information, PoseGraphEdgeType::kLoop});
+  }
+  return edges;
+}
+
+std::size_t PoseGraph::IndexOf(std::int64_t id) const {
+  const auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), id,
+                                   [](const Keyframe& k, std::int64_t i) { return k.id < i; });
+  if (it == keyframes_.end() || it->id != id) {
+    throw std::invalid_argument("PoseGraph: unknown keyframe id " + std::to_string(id));
+  }
+  return static_cast<std::size_t>(it - keyframes_.begin());
+}
+
+int PoseGraph::ComponentOf(int segment) const {
+  // No path compression: there is one segment per tracking loss, so the chains stay short.
+  while (segments_[segment].parent != segment) segment = segments_[segment].parent;
+  return segment;
+}
+
+}  // namespace stereo_fabmap_slam::backend

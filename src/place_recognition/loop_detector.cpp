@@ -1,0 +1,248 @@
+#include "stereo_fabmap_slam/place_recognition/loop_detector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include <opencv2/features2d.hpp>
+
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/odometry/pose_refiner.h"
+
+namespace stereo_fabmap_slam::place_recognition {
+namespace {
+
+constexpr double kDegreesToRadians = M_PI / 180.0;
+constexpr int kSpreadGrid = 4;  // inlier spread is counted in kSpreadGrid x kSpreadGrid cells
+
+double RotationDegrees(const Eigen::Matrix3d& rotation) {
+  return Eigen::AngleAxisd(rotation).angle() / kDegreesToRadians;
+}
+
+}  // namespace
+
+LoopDetector::LoopDetector(const LoopDetectorOptions& options, Vocabulary vocabulary, FabMap fabmap,
+                           const geometry::StereoCamera& camera, int descriptor_norm,
+                           double max_descriptor_distance)
+    : options_((options.Validate(), options)),
+      vocabulary_(std::move(vocabulary)),
+      fabmap_(std::move(fabmap)),
+      camera_(camera),
+      descriptor_norm_(descriptor_norm),
+      max_descriptor_distance_(max_descriptor_distance) {
+  if (fabmap_.model().size() != vocabulary_.size()) {
+    throw std::invalid_argument("the Chow-Liu tree has " + std::to_string(fabmap_.model().size()) +
+                                " words, the vocabulary " + std::to_string(vocabulary_.size()) +
+                                ": they were not trained together");
+  }
+}
+
+std::vector<int> LoopDetector::Words(const map::Keyframe& keyframe) const {
+  const cv::Mat& descriptors = keyframe.place_descriptors;
+  if (descriptors.empty()) return {};
+  const bool binary = descriptors.type() == CV_8U;
+  const int bytes = static_cast<int>(descriptors.cols * descriptors.elemSize());
+  if ((descriptors.type() != CV_8U && descriptors.type() != CV_32F) ||
+      binary != vocabulary_.binary() || bytes != vocabulary_.descriptor_bytes()) {
+    throw std::invalid_argument(
+        "keyframe " + std::to_string(keyframe.id) + " has " + (binary ? "binary" : "float") +
+        " place descriptors of " + std::to_string(bytes) + " bytes, the vocabulary " +
+        (vocabulary_.binary() ? "binary" : "float") + " ones of " +
+        std::to_string(vocabulary_.descriptor_bytes()) +
+        " bytes: train a vocabulary with the odometry's descriptor (train_fabmap)");
+  }
+  return vocabulary_.WordSet(descriptors);
+}
+
+LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
+  std::vector<int> words = Words(keyframe);
+  const double time = keyframe.timestamp;
+  AdmitPlaces(time);
+  if (!add_to_map) {
+    // Where the keyframe would lie on the path, without storing it.
+    map::StoredKeyframe query;
+    query.keyframe = std::move(keyframe);
+    query.words = std::move(words);
+    query.segment = -1;  // unknown: no odometry prediction to check against
+    return Detect(query, time, -1, 0);
+  }
+  const map::StoredKeyframe& stored = database_.Add(std::move(keyframe), std::move(words));
+  waiting_.push_back(stored.keyframe.id);
+  return Detect(stored, time, stored.segment, stored.path_length);
+}
+
+LoopDetection LoopDetector::DetectStored(std::int64_t keyframe_id) {
+  const map::StoredKeyframe& stored = database_.Get(keyframe_id);
+  return Detect(stored, stored.keyframe.timestamp, stored.segment, stored.path_length);
+}
+
+void LoopDetector::AdmitPlaces(double time) {
+  while (!waiting_.empty() &&
+         database_.Get(waiting_.front()).keyframe.timestamp <= time - options_.min_age) {
+    fabmap_.AddPlace(database_.Get(waiting_.front()).words);
+    place_keyframes_.push_back(waiting_.front());
+    waiting_.pop_front();
+  }
+}
+
+LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query, double query_time,
+                                   int query_segment, double query_path) {
+  LoopDetection detection;
+  detection.query_id = query.keyframe.id;
+  if (place_keyframes_.empty() || query.words.empty()) return detection;
+  const FabMapResult result = fabmap_.Compare(query.words);
+  detection.new_place_probability = result.new_place;
+
+  std::vector<int> order(result.posterior.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return result.posterior[a] > result.posterior[b] ||
+           (result.posterior[a] == result.posterior[b] && a < b);
+  });
+  for (const int place : order) {
+    if (static_cast<int>(detection.candidates.size()) >= options_.max_candidates) break;
+    if (result.posterior[place] < options_.min_probability) break;
+    const map::StoredKeyframe& candidate = database_.Get(place_keyframes_[place]);
+    // A query of a stored keyframe sees places newer than itself too: the window holds both ways.
+    if (std::abs(candidate.keyframe.timestamp - query_time) < options_.min_age) continue;
+    LoopCandidate verified = Verify(query, query_segment, query_path, candidate);
+    verified.probability = result.posterior[place];
+    verified.edge.probability = verified.probability;
+    if (verified.accepted && (!detection.loop || verified.inliers > detection.loop->inliers)) {
+      detection.loop = verified.edge;
+    }
+    detection.candidates.push_back(std::move(verified));
+  }
+  return detection;
+}
+
+LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query, int query_segment,
+                                   double query_path, const map::StoredKeyframe& candidate) const {
+  LoopCandidate result;
+  result.keyframe_id = candidate.keyframe.id;
+  const features::StereoFeatures& q = query.keyframe.features;
+  const features::StereoFeatures& c = candidate.keyframe.features;
+
+  // The candidate's stereo points, matched by descriptor with the ratio test.
+  std::vector<int> candidate_rows;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (c.HasDepth(i)) candidate_rows.push_back(static_cast<int>(i));
+  }
+  if (candidate_rows.size() < 6 || q.size() < 6) {
+    result.reason = "too few key points";
+    return result;
+  }
+  cv::Mat candidate_descriptors(static_cast<int>(candidate_rows.size()), c.descriptors.cols,
+                                c.descriptors.type());
+  for (std::size_t k = 0; k < candidate_rows.size(); ++k) {
+    c.descriptors.row(candidate_rows[k]).copyTo(candidate_descriptors.row(static_cast<int>(k)));
+  }
+  cv::BFMatcher matcher(descriptor_norm_);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(q.descriptors, candidate_descriptors, knn, 2);
+  std::vector<geometry::PnpCorrespondence> correspondences;
+  std::vector<odometry::PoseObservation> observations;
+  std::vector<int> query_keypoints;
+  for (const std::vector<cv::DMatch>& pair : knn) {
+    if (pair.empty() || pair[0].distance > max_descriptor_distance_) continue;
+    if (pair.size() > 1 && pair[0].distance >= options_.match_ratio * pair[1].distance) continue;
+    const std::size_t qi = static_cast<std::size_t>(pair[0].queryIdx);
+    const Eigen::Vector3d& point =
+        c.points[static_cast<std::size_t>(candidate_rows[pair[0].trainIdx])];
+    const cv::Point2f& pixel = q.keypoints[qi].pt;
+    correspondences.push_back(
+        {point, Eigen::Vector2d(pixel.x, pixel.y), q.HasDepth(qi), q.points[qi]});
+    observations.push_back({point, pixel.x, pixel.y, q.u_right[qi]});
+    query_keypoints.push_back(static_cast<int>(qi));
+  }
+  result.matches = static_cast<int>(correspondences.size());
+  if (result.matches < options_.min_inliers) {
+    result.reason = "only " + std::to_string(result.matches) + " descriptor matches";
+    return result;
+  }
+
+  geometry::PnpRansacOptions ransac_options;
+  ransac_options.kernel = options_.pnp_kernel;
+  ransac_options.reprojection_threshold = options_.ransac_threshold;
+  ransac_options.max_iterations = options_.ransac_iterations;
+  const geometry::PnpResult ransac = geometry::SolvePnpRansac(
+      correspondences, camera_, ransac_options, Eigen::Isometry3d::Identity());
+  if (!ransac.success || static_cast<int>(ransac.inliers.size()) < options_.min_inliers) {
+    result.inliers = static_cast<int>(ransac.inliers.size());
+    result.reason = "RANSAC found " + std::to_string(ransac.inliers.size()) + " inliers";
+    return result;
+  }
+  std::vector<bool> initial(correspondences.size(), false);
+  for (const int i : ransac.inliers) initial[static_cast<std::size_t>(i)] = true;
+  const odometry::PoseRefinement refined = odometry::RefinePose(
+      observations, camera_, ransac.T_camera_world, odometry::PoseRefinementOptions(), &initial);
+  result.inliers = refined.inliers;
+  if (refined.inliers < options_.min_inliers) {
+    result.reason = "refinement kept " + std::to_string(refined.inliers) + " inliers";
+    return result;
+  }
+
+  // Spread: a loop seen through one small object is no loop.
+  bool cells[kSpreadGrid][kSpreadGrid] = {};
+  int occupied = 0;
+  for (std::size_t k = 0; k < observations.size(); ++k) {
+    if (!refined.inlier[k]) continue;
+    const int col = std::clamp(
+        static_cast<int>(observations[k].u * kSpreadGrid / camera_.size.width), 0, kSpreadGrid - 1);
+    const int row =
+        std::clamp(static_cast<int>(observations[k].v * kSpreadGrid / camera_.size.height), 0,
+                   kSpreadGrid - 1);
+    if (!cells[row][col]) ++occupied;
+    cells[row][col] = true;
+  }
+  if (occupied < options_.min_inlier_cells) {
+    result.reason = "inliers cover only " + std::to_string(occupied) + " of " +
+                    std::to_string(kSpreadGrid * kSpreadGrid) + " image cells";
+    return result;
+  }
+
+  // T_candidate_query: the query camera in the candidate camera's frame.
+  const Eigen::Isometry3d T_candidate_query = refined.T_camera_world.inverse();
+  if (T_candidate_query.translation().norm() > options_.max_loop_distance) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "cameras %.2f m apart (more than %.2f m)",
+                  T_candidate_query.translation().norm(), options_.max_loop_distance);
+    result.reason = text;
+    return result;
+  }
+  if (query_segment >= 0 && query_segment == candidate.segment) {
+    const Eigen::Isometry3d odometry =
+        candidate.keyframe.T_world_camera.inverse() * query.keyframe.T_world_camera;
+    const double allowance =
+        std::max(options_.min_drift_allowance,
+                 options_.max_drift_fraction * std::abs(query_path - candidate.path_length));
+    const double translation_error =
+        (odometry.translation() - T_candidate_query.translation()).norm();
+    const double rotation_error =
+        RotationDegrees(odometry.linear().transpose() * T_candidate_query.linear());
+    if (translation_error > allowance || rotation_error > options_.max_rotation_drift_deg) {
+      char text[160];
+      std::snprintf(text, sizeof(text),
+                    "disagrees with the odometry by %.2f m, %.1f deg (drift allowance %.2f m)",
+                    translation_error, rotation_error, allowance);
+      result.reason = text;
+      return result;
+    }
+  }
+
+  result.accepted = true;
+  result.reason = "accepted";
+  result.edge.query_id = query.keyframe.id;
+  result.edge.match_id = candidate.keyframe.id;
+  result.edge.T_match_query = T_candidate_query;
+  result.edge.inliers = refined.inliers;
+  result.edge.information.setZero();
+  const double t = 1.0 / (options_.translation_sigma * options_.translation_sigma);
+  const double r_sigma = options_.rotation_sigma_deg * kDegreesToRadians;
+  const double r = 1.0 / (r_sigma * r_sigma);
+  result.edge.information.diagonal() << t, t, t, r, r, r;
+  return result;
+}
+
+}  // namespace stereo_fabmap_slam::place_recognition
