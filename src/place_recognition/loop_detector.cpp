@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <stdexcept>
 
@@ -60,21 +61,21 @@ LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
   const double time = keyframe.timestamp;
   AdmitPlaces(time);
   if (!add_to_map) {
-    // Where the keyframe would lie on the path, without storing it.
+    // Compared without being stored: it has no place on the odometry path to check against.
     map::StoredKeyframe query;
     query.keyframe = std::move(keyframe);
     query.words = std::move(words);
     query.segment = -1;  // unknown: no odometry prediction to check against
-    return Detect(query, time, -1, 0);
+    return Detect(query);
   }
   const map::StoredKeyframe& stored = database_.Add(std::move(keyframe), std::move(words));
   waiting_.push_back(stored.keyframe.id);
-  return Detect(stored, time, stored.segment, stored.path_length);
+  return Detect(stored);
 }
 
 LoopDetection LoopDetector::DetectStored(std::int64_t keyframe_id) {
   const map::StoredKeyframe& stored = database_.Get(keyframe_id);
-  return Detect(stored, stored.keyframe.timestamp, stored.segment, stored.path_length);
+  return Detect(stored);
 }
 
 void LoopDetector::AdmitPlaces(double time) {
@@ -86,8 +87,8 @@ void LoopDetector::AdmitPlaces(double time) {
   }
 }
 
-LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query, double query_time,
-                                   int query_segment, double query_path) {
+LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
+  const double query_time = query.keyframe.timestamp;
   LoopDetection detection;
   detection.query_id = query.keyframe.id;
   if (place_keyframes_.empty() || query.words.empty()) return detection;
@@ -106,7 +107,7 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query, double quer
     const map::StoredKeyframe& candidate = database_.Get(place_keyframes_[place]);
     // A query of a stored keyframe sees places newer than itself too: the window holds both ways.
     if (std::abs(candidate.keyframe.timestamp - query_time) < options_.min_age) continue;
-    LoopCandidate verified = Verify(query, query_segment, query_path, candidate);
+    LoopCandidate verified = Verify(query, candidate);
     verified.probability = result.posterior[place];
     verified.edge.probability = verified.probability;
     if (verified.accepted && (!detection.loop || verified.inliers > detection.loop->inliers)) {
@@ -117,8 +118,8 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query, double quer
   return detection;
 }
 
-LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query, int query_segment,
-                                   double query_path, const map::StoredKeyframe& candidate) const {
+LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
+                                   const map::StoredKeyframe& candidate) const {
   LoopCandidate result;
   result.keyframe_id = candidate.keyframe.id;
   const features::StereoFeatures& q = query.keyframe.features;
@@ -211,12 +212,12 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query, int query_s
     result.reason = text;
     return result;
   }
-  if (query_segment >= 0 && query_segment == candidate.segment) {
+  if (query.segment >= 0 && query.segment == candidate.segment) {
     const Eigen::Isometry3d odometry =
         candidate.keyframe.T_world_camera.inverse() * query.keyframe.T_world_camera;
     const double allowance =
         std::max(options_.min_drift_allowance,
-                 options_.max_drift_fraction * std::abs(query_path - candidate.path_length));
+                 options_.max_drift_fraction * std::abs(query.path_length - candidate.path_length));
     const double translation_error =
         (odometry.translation() - T_candidate_query.translation()).norm();
     const double rotation_error =

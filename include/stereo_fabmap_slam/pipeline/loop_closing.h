@@ -1,8 +1,6 @@
 #pragma once
 
 #include <functional>
-#include <map>
-#include <string>
 
 #include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/map/keyframe.h"

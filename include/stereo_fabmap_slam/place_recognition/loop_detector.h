@@ -64,11 +64,11 @@ class LoopDetector {
   std::size_t places() const { return place_keyframes_.size(); }
 
  private:
-  LoopDetection Detect(const map::StoredKeyframe& query, double query_time, int query_segment,
-                       double query_path);
+  // A query of segment -1 (not stored) has no odometry to check the verified pose against.
+  LoopDetection Detect(const map::StoredKeyframe& query);
   // Keyframes at least min_age older than `time` become FAB-MAP places.
   void AdmitPlaces(double time);
-  LoopCandidate Verify(const map::StoredKeyframe& query, int query_segment, double query_path,
+  LoopCandidate Verify(const map::StoredKeyframe& query,
                        const map::StoredKeyframe& candidate) const;
 
   LoopDetectorOptions options_;
