@@ -51,8 +51,9 @@ recorder_pid=
 trap cleanup EXIT
 until rosparam list > /dev/null 2>&1; do sleep 0.2; done
 
-echo "== running the ROS graph: nodelet manager + StereoTracker + Backend, rosbag play $bag"
-rosbag record -q -O "$OUT/recorded.bag" /odometry /keyframes /keyframe_updates > /dev/null 2>&1 &
+echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector, rosbag play $bag"
+rosbag record -q -O "$OUT/recorded.bag" /odometry /keyframes /keyframe_updates /loop_edges /map_graph \
+  > /dev/null 2>&1 &
 recorder_pid=$!
 sleep 1
 graph_start=$SECONDS
@@ -66,27 +67,35 @@ kill -INT "$recorder_pid"; wait "$recorder_pid" 2> /dev/null || true
 recorder_pid=
 
 echo "== evaluating against ground truth"
-/usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/trajectory.txt" \
-  "$OUT/keyframes.txt" > "$OUT/topics.txt"
-"$BIN/evaluate_trajectory" --gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" \
-  --gt-to-camera "$SEQUENCE/mav0/cam0/sensor.yaml" --est "$OUT/trajectory.txt" \
-  --keyframes "$OUT/keyframes.txt" --plot "$OUT/trajectory.png" > "$OUT/evaluation.txt"
+/usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/odometry.txt" \
+  "$OUT/keyframes.txt" "$OUT/trajectory.txt" "$OUT/loops.txt" > "$OUT/topics.txt"
+gt=(--gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" --gt-to-camera "$SEQUENCE/mav0/cam0/sensor.yaml")
+"$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/odometry.txt" > "$OUT/evaluation_odometry.txt"
+"$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/trajectory.txt" --keyframes "$OUT/keyframes.txt" \
+  --loops "$OUT/loops.txt" --plot "$OUT/trajectory.png" > "$OUT/evaluation.txt"
 loops_present="unknown (real data)"
 if [ -f "$SEQUENCE/mav0/synthetic.yaml" ]; then
   loops_present=$(sed -n 's/^revisits: \[\(.*\)\]/\1/p' "$SEQUENCE/mav0/synthetic.yaml" | awk -F, 'NF == 0 {print 0} NF > 0 {print NF}')
 fi
 frames=$(grep -c . "$SEQUENCE/mav0/cam0/data.csv"); frames=$((frames - 1))
-odometry=$(awk '$1 == "/odometry" {print $2}' "$OUT/topics.txt")
-keyframes=$(awk '$1 == "/keyframes" {print $2}' "$OUT/topics.txt")
+count() { awk -v topic="$1" '$1 == topic {print $2}' "$OUT/topics.txt"; }
+odometry=$(count /odometry)
+keyframes=$(count /keyframes)
+loop_edges=$(count /loop_edges)
+first_loop=$(awk '!/^#/ {print $1; exit}' "$OUT/loops.txt")
+start=$(awk '!/^#/ {print $1; exit}' "$OUT/odometry.txt")
 ate=$(awk '/^ATE/ {print $3}' "$OUT/evaluation.txt")
+ate_odometry=$(awk '/^ATE/ {print $3}' "$OUT/evaluation_odometry.txt")
 echo
 echo "demo summary ($NAME)"
 echo "  frames played           $frames"
 echo "  odometry messages       $odometry"
 echo "  keyframes               ${keyframes:-0}"
-echo "  ATE RMSE (SE3)          $ate cm"
-echo "  loops found / present   - / $loops_present (no loop detector in the ROS graph yet)"
+echo "  loop edges accepted     ${loop_edges:-0}${first_loop:+ (first at $(awk -v a="$first_loop" -v b="$start" 'BEGIN {printf "%.1f", a - b}') s)}"
+echo "  revisits present        $loops_present"
+echo "  ATE RMSE odometry       $ate_odometry cm"
+echo "  ATE RMSE loop-closed    $ate cm"
 echo "  relocalization          - (not built yet)"
 echo "  ROS graph run time      ${graph_seconds} s (bag of $(rosbag info -y -k duration "$bag" | cut -c1-5) s at rate $RATE)"
-echo "  files                   $OUT/trajectory.txt, keyframes.txt, trajectory.png, evaluation.txt"
+echo "  files                   $OUT/trajectory.txt, odometry.txt, keyframes.txt, loops.txt, trajectory.png, evaluation.txt"
 echo "== demo done in ${SECONDS} s"

@@ -1,18 +1,25 @@
-// Backend: keyframes in, windowed bundle adjustment in a worker thread it owns, keyframe_updates
-// out. The bundle adjustment itself is backend::LocalBundleAdjuster.
+// Backend: keyframes and loop edges in; windowed bundle adjustment (odom frame) and the pose
+// graph (map frame) in a worker thread it owns; keyframe_updates, map_graph and tf map -> odom
+// out. The algorithms are backend::LocalBundleAdjuster and backend::PoseGraph.
 #include <condition_variable>
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
+#include <vector>
 
+#include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
+#include "stereo_fabmap_slam/backend/pose_graph.h"
 
 namespace stereo_fabmap_slam {
 
@@ -23,37 +30,62 @@ class BackendNodelet : public nodelet::Nodelet {
  private:
   void onInit() override;
   void OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe);
+  void OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop);
+  void OnTfTimer(const ros::WallTimerEvent&);
   void Work();
+  // Adds to the graph the loop edges whose keyframes it has (the LoopDetector may be ahead of
+  // the bundle adjustment); true if any was added. The others wait.
+  bool AddReadyLoops(backend::PoseGraph* graph, std::deque<map::LoopEdge>* loops);
 
   backend::BundleAdjustmentOptions options_;
-  ros::Subscriber keyframe_subscriber_;
-  ros::Publisher update_publisher_;
+  backend::PoseGraphOptions pose_graph_options_;
+  std::string map_frame_, odom_frame_;
+  ros::Subscriber keyframe_subscriber_, loop_subscriber_;
+  ros::Publisher update_publisher_, graph_publisher_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
+  ros::WallTimer tf_timer_;
 
   std::mutex mutex_;
   std::condition_variable wake_;
-  // Keyframes not yet adjusted. Never bounded by dropping: a keyframe missing from the map
-  // would leave a hole in the graph. Under load the worker adjusts the newest of them together
-  // and skips the optimisations in between (see Work()).
+  // Keyframes and loop edges not yet in the map. Never bounded by dropping: a keyframe missing
+  // from the map would leave a hole in the graph. Under load the worker adjusts the newest of
+  // them together and skips the optimisations in between (see Work()).
   std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
+  std::deque<map::LoopEdge> loop_queue_;
   bool stopping_ = false;
   std::thread worker_;
+
+  std::mutex map_to_odom_mutex_;
+  Eigen::Isometry3d map_to_odom_ = Eigen::Isometry3d::Identity();  // the graph's latest
 };
 
 void BackendNodelet::onInit() {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
   try {
     options_ = ros_parameters::ReadModuleOptions(private_node, options_);
+    pose_graph_options_ = ros_parameters::ReadModuleOptions(private_node, pose_graph_options_);
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
-  NODELET_INFO_STREAM("options in force:\n" << ros_parameters::PrintedOptions(options_));
+  NODELET_INFO_STREAM("options in force:\n"
+                      << ros_parameters::PrintedOptions(options_)
+                      << ros_parameters::PrintedOptions(pose_graph_options_));
+  map_frame_ = private_node.param<std::string>("map_frame", "map");
+  odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
+  const double tf_rate = private_node.param("tf_rate", 20.0);
 
-  update_publisher_ =
-      getNodeHandle().advertise<stereo_fabmap_slam::KeyframeUpdate>("keyframe_updates", 100);
+  ros::NodeHandle& node = getNodeHandle();
+  update_publisher_ = node.advertise<stereo_fabmap_slam::KeyframeUpdate>("keyframe_updates", 100);
+  graph_publisher_ = node.advertise<stereo_fabmap_slam::MapGraph>("map_graph", 1, true);
+  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   worker_ = std::thread(&BackendNodelet::Work, this);
-  keyframe_subscriber_ =
-      getNodeHandle().subscribe("keyframes", 100, &BackendNodelet::OnKeyframe, this);
+  keyframe_subscriber_ = node.subscribe("keyframes", 100, &BackendNodelet::OnKeyframe, this);
+  loop_subscriber_ = node.subscribe("loop_edges", 100, &BackendNodelet::OnLoopEdge, this);
+  // map -> odom is broadcast steadily, not only when it changes, so that tf can look up any
+  // recent time without extrapolating.
+  tf_timer_ =
+      node.createWallTimer(ros::WallDuration(1.0 / tf_rate), &BackendNodelet::OnTfTimer, this);
 }
 
 BackendNodelet::~BackendNodelet() {
@@ -73,15 +105,39 @@ void BackendNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyf
   wake_.notify_one();
 }
 
+void BackendNodelet::OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    loop_queue_.push_back(ros_conversions::FromLoopEdgeMessage(*loop));
+  }
+  wake_.notify_one();
+}
+
+void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
+  geometry_msgs::TransformStamped transform;
+  {
+    std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
+    transform.transform = ros_conversions::ToTransformMessage(map_to_odom_);
+  }
+  transform.header.stamp = ros::Time::now();
+  transform.header.frame_id = map_frame_;
+  transform.child_frame_id = odom_frame_;
+  tf_broadcaster_->sendTransform(transform);
+}
+
 void BackendNodelet::Work() {
   std::unique_ptr<backend::LocalBundleAdjuster> adjuster;
+  backend::PoseGraph graph(pose_graph_options_);
+  std::deque<map::LoopEdge> pending_loops;  // their keyframes have not arrived yet
   while (true) {
     std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+      wake_.wait(lock, [&] { return stopping_ || !queue_.empty() || !loop_queue_.empty(); });
       if (stopping_) return;
       waiting.swap(queue_);
+      pending_loops.insert(pending_loops.end(), loop_queue_.begin(), loop_queue_.end());
+      loop_queue_.clear();
     }
     if (waiting.size() > 1) {
       NODELET_WARN_THROTTLE(5,
@@ -91,6 +147,7 @@ void BackendNodelet::Work() {
     }
     // Every keyframe enters the map; only the newest is followed by an optimisation, whose
     // window covers the others.
+    ros::Time stamp;
     while (!waiting.empty()) {
       const stereo_fabmap_slam::KeyframeConstPtr message = waiting.front();
       waiting.pop_front();
@@ -100,8 +157,13 @@ void BackendNodelet::Work() {
           adjuster = std::make_unique<backend::LocalBundleAdjuster>(
               options_, ros_conversions::CameraOfKeyframe(*message));
         }
-        const map::KeyframeUpdate update =
-            adjuster->AddKeyframe(ros_conversions::FromKeyframeMessage(*message), optimise);
+        const map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
+        const map::KeyframeUpdate update = adjuster->AddKeyframe(keyframe, optimise);
+        graph.AddKeyframe(keyframe.id, keyframe.T_world_camera, keyframe.starts_new_map);
+        for (const auto& [id, pose] : update.keyframe_poses) {
+          if (graph.Contains(id)) graph.UpdateOdometryPose(id, pose);
+        }
+        stamp = message->header.stamp;
         if (!optimise) continue;
         stereo_fabmap_slam::KeyframeUpdate update_message =
             ros_conversions::ToKeyframeUpdateMessage(update);
@@ -112,7 +174,39 @@ void BackendNodelet::Work() {
                               static_cast<unsigned long>(message->id), error.what());
       }
     }
+    if (AddReadyLoops(&graph, &pending_loops)) {
+      const backend::PoseGraphSummary summary = graph.Optimize();
+      NODELET_INFO("pose graph: %zu keyframes optimised in %d iterations", graph.size(),
+                   summary.iterations);
+      std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
+      map_to_odom_ = graph.MapToOdom();
+    }
+    if (!stamp.isZero() || graph.size() > 0) {
+      stereo_fabmap_slam::MapGraph message = ros_conversions::ToMapGraphMessage(graph);
+      message.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+      message.header.frame_id = map_frame_;
+      graph_publisher_.publish(message);
+    }
   }
+}
+
+bool BackendNodelet::AddReadyLoops(backend::PoseGraph* graph, std::deque<map::LoopEdge>* loops) {
+  bool added = false;
+  for (auto it = loops->begin(); it != loops->end();) {
+    if (!graph->Contains(it->query_id) || !graph->Contains(it->match_id)) {
+      ++it;
+      continue;
+    }
+    try {
+      graph->AddLoop(*it);
+      added = true;
+    } catch (const std::exception& error) {
+      NODELET_WARN("loop edge %ld -> %ld ignored: %s", static_cast<long>(it->query_id),
+                   static_cast<long>(it->match_id), error.what());
+    }
+    it = loops->erase(it);
+  }
+  return added;
 }
 
 }  // namespace stereo_fabmap_slam

@@ -26,6 +26,7 @@
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
 namespace stereo_fabmap_slam {
 
@@ -83,6 +84,18 @@ void StereoTrackerNodelet::LoadOptions(const ros::NodeHandle& private_node) {
     options = ros_parameters::ReadModuleOptions(private_node, options);
     printed += ros_parameters::PrintedOptions(options);
   });
+  // Loop closing needs place descriptors in every keyframe, with place recognition's own key
+  // point selection (config/fabmap.yaml).
+  if (private_node.param("loop_closing", true)) {
+    std::string fabmap_config;
+    if (!private_node.getParam("fabmap_config", fabmap_config)) {
+      throw std::runtime_error(
+          "set ~fabmap_config (e.g. config/fabmap.yaml) or ~loop_closing false");
+    }
+    options_.place_features =
+        place_recognition::LoadPlaceRecognitionOptions(fabmap_config, options_.features).features;
+    printed += "place recognition features from " + fabmap_config + "\n";
+  }
   NODELET_INFO_STREAM("options in force:\n" << printed);
 }
 
@@ -239,10 +252,7 @@ void StereoTrackerNodelet::Publish(const ros::Time& stamp, const odometry::Track
   geometry_msgs::TransformStamped transform;
   transform.header = odometry.header;
   transform.child_frame_id = camera_frame_;
-  transform.transform.translation.x = pose.position.x;
-  transform.transform.translation.y = pose.position.y;
-  transform.transform.translation.z = pose.position.z;
-  transform.transform.rotation = pose.orientation;
+  transform.transform = ros_conversions::ToTransformMessage(result.T_world_camera);
   tf_broadcaster_->sendTransform(transform);
 
   if (result.keyframe) {

@@ -9,6 +9,29 @@
 
 namespace stereo_fabmap_slam::ros_conversions {
 
+namespace {
+
+// Descriptors (one per row, CV_8U binary or CV_32F) as the bytes of a message, row-major.
+void PackDescriptors(const cv::Mat& descriptors, std::vector<std::uint8_t>* bytes,
+                     std::uint32_t* row_bytes, std::uint8_t* are_float) {
+  const cv::Mat continuous = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  *are_float = continuous.type() == CV_32F;
+  *row_bytes = static_cast<std::uint32_t>(continuous.cols * continuous.elemSize());
+  bytes->assign(continuous.data, continuous.data + continuous.total() * continuous.elemSize());
+}
+
+cv::Mat UnpackDescriptors(const std::vector<std::uint8_t>& bytes, std::uint32_t row_bytes,
+                          bool are_float) {
+  if (row_bytes == 0) return cv::Mat();
+  const int rows = static_cast<int>(bytes.size() / row_bytes);
+  cv::Mat descriptors(rows, static_cast<int>(row_bytes / (are_float ? 4 : 1)),
+                      are_float ? CV_32F : CV_8U);
+  if (!bytes.empty()) std::memcpy(descriptors.data, bytes.data(), bytes.size());
+  return descriptors;
+}
+
+}  // namespace
+
 ros::Time ToRosTime(std::int64_t timestamp_ns) {
   ros::Time time;
   time.fromNSec(static_cast<std::uint64_t>(timestamp_ns));
@@ -106,11 +129,10 @@ stereo_fabmap_slam::Keyframe ToKeyframeMessage(const map::Keyframe& keyframe,
     message.points[i].y = static_cast<float>(f.points[i].y());
     message.points[i].z = static_cast<float>(f.points[i].z());
   }
-  const cv::Mat descriptors = f.descriptors.isContinuous() ? f.descriptors : f.descriptors.clone();
-  message.descriptors_are_float = descriptors.type() == CV_32F;
-  message.descriptor_bytes = static_cast<std::uint32_t>(descriptors.cols * descriptors.elemSize());
-  message.descriptors.assign(descriptors.data,
-                             descriptors.data + descriptors.total() * descriptors.elemSize());
+  PackDescriptors(f.descriptors, &message.descriptors, &message.descriptor_bytes,
+                  &message.descriptors_are_float);
+  PackDescriptors(keyframe.place_descriptors, &message.place_descriptors,
+                  &message.place_descriptor_bytes, &message.place_descriptors_are_float);
   message.map_point_ids.assign(keyframe.map_point_ids.begin(), keyframe.map_point_ids.end());
   return message;
 }
@@ -119,7 +141,12 @@ map::Keyframe FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message) {
   const std::size_t n = message.u.size();
   if (message.v.size() != n || message.u_right.size() != n || message.points.size() != n ||
       message.map_point_ids.size() != n ||
-      message.descriptors.size() != n * message.descriptor_bytes) {
+      message.descriptors.size() != n * message.descriptor_bytes ||
+      (message.place_descriptor_bytes == 0
+           ? !message.place_descriptors.empty()
+           : message.place_descriptors.size() % message.place_descriptor_bytes != 0) ||
+      (message.place_descriptors_are_float && message.place_descriptor_bytes % 4 != 0) ||
+      (message.descriptors_are_float && message.descriptor_bytes % 4 != 0)) {
     throw std::invalid_argument("Keyframe message: arrays of different lengths");
   }
   map::Keyframe keyframe;
@@ -135,13 +162,11 @@ map::Keyframe FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message) {
     f.keypoints[i] = cv::KeyPoint(message.u[i], message.v[i], 7.0f);
     f.points[i] = Eigen::Vector3d(message.points[i].x, message.points[i].y, message.points[i].z);
   }
-  const int element = message.descriptors_are_float ? CV_32F : CV_8U;
-  const int columns =
-      static_cast<int>(message.descriptor_bytes / (message.descriptors_are_float ? 4 : 1));
-  f.descriptors = cv::Mat(static_cast<int>(n), columns, element);
-  if (!message.descriptors.empty()) {
-    std::memcpy(f.descriptors.data, message.descriptors.data(), message.descriptors.size());
-  }
+  f.descriptors = UnpackDescriptors(message.descriptors, message.descriptor_bytes,
+                                    message.descriptors_are_float);
+  keyframe.place_descriptors =
+      UnpackDescriptors(message.place_descriptors, message.place_descriptor_bytes,
+                        message.place_descriptors_are_float);
   keyframe.map_point_ids.assign(message.map_point_ids.begin(), message.map_point_ids.end());
   return keyframe;
 }
@@ -191,6 +216,62 @@ map::KeyframeUpdate FromKeyframeUpdateMessage(const stereo_fabmap_slam::Keyframe
   }
   update.removed_points.assign(message.removed_point_ids.begin(), message.removed_point_ids.end());
   return update;
+}
+
+stereo_fabmap_slam::LoopEdge ToLoopEdgeMessage(const map::LoopEdge& edge) {
+  stereo_fabmap_slam::LoopEdge message;
+  message.query_id = static_cast<std::uint64_t>(edge.query_id);
+  message.match_id = static_cast<std::uint64_t>(edge.match_id);
+  message.T_match_query = ToPoseMessage(edge.T_match_query);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) message.information[r * 6 + c] = edge.information(r, c);
+  }
+  message.inliers = edge.inliers;
+  message.probability = edge.probability;
+  return message;
+}
+
+map::LoopEdge FromLoopEdgeMessage(const stereo_fabmap_slam::LoopEdge& message) {
+  map::LoopEdge edge;
+  edge.query_id = static_cast<std::int64_t>(message.query_id);
+  edge.match_id = static_cast<std::int64_t>(message.match_id);
+  edge.T_match_query = FromPoseMessage(message.T_match_query);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) edge.information(r, c) = message.information[r * 6 + c];
+  }
+  edge.inliers = message.inliers;
+  edge.probability = message.probability;
+  return edge;
+}
+
+stereo_fabmap_slam::MapGraph ToMapGraphMessage(const backend::PoseGraph& graph) {
+  stereo_fabmap_slam::MapGraph message;
+  for (const auto& [id, pose] : graph.MapPoses()) {
+    message.keyframe_ids.push_back(static_cast<std::uint64_t>(id));
+    message.keyframe_poses.push_back(ToPoseMessage(pose));
+  }
+  for (const backend::PoseGraphEdge& edge : graph.Edges()) {
+    stereo_fabmap_slam::MapGraphEdge edge_message;
+    edge_message.from_id = static_cast<std::uint64_t>(edge.from);
+    edge_message.to_id = static_cast<std::uint64_t>(edge.to);
+    edge_message.type = edge.type == backend::PoseGraphEdgeType::kLoop
+                            ? stereo_fabmap_slam::MapGraphEdge::LOOP
+                            : stereo_fabmap_slam::MapGraphEdge::ODOMETRY;
+    edge_message.T_from_to = ToPoseMessage(edge.T_from_to);
+    message.edges.push_back(edge_message);
+  }
+  message.map_to_odom = ToTransformMessage(graph.MapToOdom());
+  return message;
+}
+
+geometry_msgs::Transform ToTransformMessage(const Eigen::Isometry3d& transform) {
+  const geometry_msgs::Pose pose = ToPoseMessage(transform);
+  geometry_msgs::Transform message;
+  message.translation.x = pose.position.x;
+  message.translation.y = pose.position.y;
+  message.translation.z = pose.position.z;
+  message.rotation = pose.orientation;
+  return message;
 }
 
 }  // namespace stereo_fabmap_slam::ros_conversions

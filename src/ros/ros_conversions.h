@@ -6,6 +6,7 @@
 #include <string>
 
 #include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Transform.h>
 #include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -14,10 +15,14 @@
 
 #include <stereo_fabmap_slam/Keyframe.h>
 #include <stereo_fabmap_slam/KeyframeUpdate.h>
+#include <stereo_fabmap_slam/LoopEdge.h>
+#include <stereo_fabmap_slam/MapGraph.h>
 
+#include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/map/keyframe.h"
 #include "stereo_fabmap_slam/map/keyframe_update.h"
+#include "stereo_fabmap_slam/map/loop_edge.h"
 
 namespace stereo_fabmap_slam::ros_conversions {
 
@@ -30,6 +35,7 @@ sensor_msgs::ImagePtr ToMono8ImageMessage(const cv::Mat& image, const ros::Time&
 
 geometry_msgs::Pose ToPoseMessage(const Eigen::Isometry3d& pose);
 Eigen::Isometry3d FromPoseMessage(const geometry_msgs::Pose& pose);
+geometry_msgs::Transform ToTransformMessage(const Eigen::Isometry3d& transform);
 
 // CameraInfo <-> rectification parameters (K, D, R, P). Only the plumb_bob model (4 or 5
 // coefficients) is accepted; anything else throws std::invalid_argument.
@@ -52,5 +58,10 @@ map::Keyframe FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message);
 geometry::StereoCamera CameraOfKeyframe(const stereo_fabmap_slam::Keyframe& message);
 stereo_fabmap_slam::KeyframeUpdate ToKeyframeUpdateMessage(const map::KeyframeUpdate& update);
 map::KeyframeUpdate FromKeyframeUpdateMessage(const stereo_fabmap_slam::KeyframeUpdate& message);
+
+// Loop edges, and the pose graph as the Backend publishes it (header left to the caller).
+stereo_fabmap_slam::LoopEdge ToLoopEdgeMessage(const map::LoopEdge& edge);
+map::LoopEdge FromLoopEdgeMessage(const stereo_fabmap_slam::LoopEdge& message);
+stereo_fabmap_slam::MapGraph ToMapGraphMessage(const backend::PoseGraph& graph);
 
 }  // namespace stereo_fabmap_slam::ros_conversions

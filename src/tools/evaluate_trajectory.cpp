@@ -11,6 +11,7 @@
 #include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_plot.h"
+#include "stereo_fabmap_slam/io/csv_reader.h"
 
 namespace {
 
@@ -20,12 +21,13 @@ constexpr char kUsage[] =
     "usage: evaluate_trajectory --gt FILE --est FILE [--align se3|sim3|none] [--max-dt S]\n"
     "                           [--gt-to-camera sensor.yaml] [--rpe-delta D] [--rpe-unit "
     "frames|m]\n"
-    "                           [--json] [--plot out.png] [--keyframes FILE]\n"
+    "                           [--json] [--plot out.png] [--keyframes FILE] [--loops FILE]\n"
     "Trajectory files: TUM (t x y z qx qy qz qw), EuRoC CSV (.csv, stamps in ns) or KITTI (3x4).\n"
     "ATE: positions of the estimate aligned to the ground truth (Umeyama, --align, default se3),\n"
     "then RMSE/mean/median/max of the position differences, as evo_ape -a.\n"
     "RPE: for every matched pose i and the pose j --rpe-delta later (default 1 frame), the\n"
-    "translation norm and angle of (GT_i^-1 GT_j)^-1 (EST_i^-1 EST_j).\n";
+    "translation norm and angle of (GT_i^-1 GT_j)^-1 (EST_i^-1 EST_j).\n"
+    "--loops FILE: lines 'query_time match_time' (loop edges), drawn in the plot.\n";
 
 void PrintStatsRow(const char* name, const evaluation::ErrorStatistics& s, double unit_scale) {
   std::printf("%-16s %10.4f %10.4f %10.4f %10.4f %8zu\n", name, s.rmse * unit_scale,
@@ -62,9 +64,22 @@ void PrintJson(const evaluation::EvaluationResult& r, const evaluation::Evaluati
       o.rpe_delta.unit == evaluation::RpeDelta::Unit::kFrames ? "frames" : "m");
 }
 
-// `keyframes` (may be empty) are drawn with the estimate's alignment.
+// The aligned position of the pose of `trajectory` nearest in time to `time`.
+Eigen::Vector3d NearestPosition(const evaluation::Trajectory& trajectory,
+                                const evaluation::EvaluationResult& r, double time) {
+  const evaluation::StampedPose* nearest = &trajectory.front();
+  for (const auto& p : trajectory) {
+    if (std::abs(p.timestamp - time) < std::abs(nearest->timestamp - time)) nearest = &p;
+  }
+  return r.alignment * nearest->pose.translation();
+}
+
+// `keyframes` (may be empty) are drawn with the estimate's alignment; `loops` (pairs of
+// keyframe times, may be empty) as segments between the keyframes (or estimated poses) nearest
+// those times.
 void WritePlot(const evaluation::EvaluationResult& r, const evaluation::Trajectory& keyframes,
-               const std::string& path) {
+               const evaluation::Trajectory& estimate_raw,
+               const std::vector<std::pair<double, double>>& loops, const std::string& path) {
   std::vector<Eigen::Vector3d> reference, estimate, keyframe_positions;
   for (const auto& p : r.matched_reference) reference.push_back(p.pose.translation());
   for (const auto& p : r.aligned_estimate) estimate.push_back(p.pose.translation());
@@ -74,6 +89,14 @@ void WritePlot(const evaluation::EvaluationResult& r, const evaluation::Trajecto
   plot.AddPath(estimate, cv::Scalar(200, 90, 0), "estimate (aligned)", 2);
   if (!keyframe_positions.empty())
     plot.AddPoints(keyframe_positions, cv::Scalar(30, 30, 220), "keyframes", 4);
+  if (!loops.empty()) {
+    const evaluation::Trajectory& ends = keyframes.empty() ? estimate_raw : keyframes;
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> segments;
+    for (const auto& [query, match] : loops) {
+      segments.emplace_back(NearestPosition(ends, r, query), NearestPosition(ends, r, match));
+    }
+    plot.AddSegments(segments, cv::Scalar(40, 170, 40), "loop edges", 2);
+  }
   char title[128];
   std::snprintf(title, sizeof(title), "ATE RMSE %.2f cm over %zu poses", r.ate.rmse * 100.0,
                 r.matched);
@@ -91,7 +114,7 @@ int main(int argc, char** argv) {
   try {
     args.emplace(argc, argv,
                  std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "plot",
-                                       "rpe-delta", "rpe-unit", "keyframes"},
+                                       "rpe-delta", "rpe-unit", "keyframes", "loops"},
                  std::set<std::string>{"json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -133,10 +156,20 @@ int main(int argc, char** argv) {
     }
     if (const auto plot_path = args->Value("plot")) {
       const auto keyframes_path = args->Value("keyframes");
+      std::vector<std::pair<double, double>> loops;
+      if (const auto loops_path = args->Value("loops")) {
+        for (const io::TextRow& row :
+             io::ReadDelimitedText(*loops_path, io::Separator::kWhitespace)) {
+          if (row.fields.size() < 2)
+            throw io::FileError(*loops_path, row.line_number, "expected two times");
+          loops.emplace_back(io::ParseDouble(row.fields[0], *loops_path, row.line_number),
+                             io::ParseDouble(row.fields[1], *loops_path, row.line_number));
+        }
+      }
       WritePlot(
           result,
           keyframes_path ? evaluation::ReadTrajectory(*keyframes_path) : evaluation::Trajectory{},
-          *plot_path);
+          estimate, loops, *plot_path);
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "evaluate_trajectory: %s\n", error.what());

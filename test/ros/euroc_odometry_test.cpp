@@ -30,7 +30,7 @@ TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
             0)
       << output;
   const evaluation::Trajectory offline =
-      evaluation::ReadTumTrajectory(temp.path() + "/offline/trajectory.txt");
+      evaluation::ReadTumTrajectory(temp.path() + "/offline/odometry.txt");  // odom frame
 
   std::mutex mutex;
   std::map<std::int64_t, Eigen::Isometry3d> online;  // by stamp [ns]

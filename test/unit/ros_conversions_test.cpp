@@ -85,6 +85,8 @@ map::Keyframe ExampleKeyframe() {
   }
   f.descriptors = cv::Mat(5, 64, CV_8U);
   cv::randu(f.descriptors, 0, 256);
+  keyframe.place_descriptors = cv::Mat(7, 64, CV_8U);
+  cv::randu(keyframe.place_descriptors, 0, 256);
   return keyframe;
 }
 
@@ -107,6 +109,9 @@ TEST(RosConversions, KeyframeRoundTrip) {
   }
   EXPECT_EQ(back.map_point_ids, keyframe.map_point_ids);
   EXPECT_EQ(cv::norm(back.features.descriptors, keyframe.features.descriptors, cv::NORM_L1), 0);
+  ASSERT_EQ(back.place_descriptors.size(), keyframe.place_descriptors.size());
+  EXPECT_EQ(back.place_descriptors.type(), CV_8U);
+  EXPECT_EQ(cv::norm(back.place_descriptors, keyframe.place_descriptors, cv::NORM_L1), 0);
   const geometry::StereoCamera camera_back = CameraOfKeyframe(message);
   EXPECT_EQ(camera_back.size, camera.size);
   EXPECT_EQ(camera_back.fx, camera.fx);
@@ -117,6 +122,9 @@ TEST(RosConversions, KeyframeWithInconsistentArraysIsRefused) {
   const geometry::StereoCamera camera{cv::Size(752, 480), 458.0, 457.0, 367.0, 248.0, 0.11};
   stereo_fabmap_slam::Keyframe message = ToKeyframeMessage(ExampleKeyframe(), camera, "odom");
   message.v.pop_back();
+  EXPECT_THROW(FromKeyframeMessage(message), std::invalid_argument);
+  message = ToKeyframeMessage(ExampleKeyframe(), camera, "odom");
+  message.place_descriptors.pop_back();  // no longer whole rows
   EXPECT_THROW(FromKeyframeMessage(message), std::invalid_argument);
 }
 
@@ -140,6 +148,27 @@ TEST(RosConversions, KeyframeUpdateRoundTrip) {
   stereo_fabmap_slam::KeyframeUpdate broken = ToKeyframeUpdateMessage(update);
   broken.keyframe_ids.pop_back();
   EXPECT_THROW(FromKeyframeUpdateMessage(broken), std::invalid_argument);
+}
+
+TEST(RosConversions, LoopEdgeRoundTrip) {
+  map::LoopEdge edge;
+  edge.query_id = 120;
+  edge.match_id = 7;
+  edge.T_match_query.linear() =
+      Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  edge.T_match_query.translation() = Eigen::Vector3d(0.3, -0.1, 0.05);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) edge.information(r, c) = r == c ? 100.0 + r : 0.5 * (r + c);
+  }
+  edge.inliers = 87;
+  edge.probability = 0.93;
+  const map::LoopEdge back = FromLoopEdgeMessage(ToLoopEdgeMessage(edge));
+  EXPECT_EQ(back.query_id, 120);
+  EXPECT_EQ(back.match_id, 7);
+  EXPECT_TRUE(back.T_match_query.isApprox(edge.T_match_query, 1e-12));
+  EXPECT_EQ(back.information, edge.information);  // row-major, element by element
+  EXPECT_EQ(back.inliers, 87);
+  EXPECT_EQ(back.probability, 0.93);
 }
 
 }  // namespace

@@ -1,0 +1,126 @@
+// The StereoTracker, Backend and LoopDetector nodelets on a rendered route that returns to its
+// start: at least one loop edge, a map -> odom transform on tf, a map_graph with a loop edge,
+// and detect_loop answering a call (and refusing a bad one).
+#include <atomic>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <stereo_fabmap_slam/DetectLoop.h>
+#include <stereo_fabmap_slam/LoopEdge.h>
+#include <stereo_fabmap_slam/MapGraph.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
+  TemporaryDirectory temp;
+  const std::string sequence = temp.path() + "/loop";
+  std::string output;
+  // 34 s of the "loop" route: back past the start from about 26 s on.
+  ASSERT_EQ(RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --out " + sequence +
+                           " --route loop --seconds 34 --seed 1 2>&1",
+                       &output),
+            0)
+      << output;
+
+  std::mutex mutex;
+  std::vector<stereo_fabmap_slam::LoopEdge> loops;
+  int map_to_odom = 0, graph_loop_edges = 0;
+  ros::NodeHandle node;
+  const ros::Subscriber loop_subscriber = node.subscribe<stereo_fabmap_slam::LoopEdge>(
+      "/loop_edges", 1000, [&](const stereo_fabmap_slam::LoopEdgeConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        loops.push_back(*message);
+      });
+  const ros::Subscriber tf_subscriber = node.subscribe<tf2_msgs::TFMessage>(
+      "/tf", 1000, [&](const tf2_msgs::TFMessageConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& transform : message->transforms) {
+          if (transform.header.frame_id == "map" && transform.child_frame_id == "odom") {
+            ++map_to_odom;
+          }
+        }
+      });
+  const ros::Subscriber graph_subscriber = node.subscribe<stereo_fabmap_slam::MapGraph>(
+      "/map_graph", 10, [&](const stereo_fabmap_slam::MapGraphConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        int count = 0;
+        for (const auto& edge : message->edges) {
+          count += edge.type == stereo_fabmap_slam::MapGraphEdge::LOOP ? 1 : 0;
+        }
+        graph_loop_edges = std::max(graph_loop_edges, count);
+      });
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+
+  // Call detect_loop while the graph runs: once for a keyframe id nobody has (refused), then,
+  // once a loop was published, for its query keyframe.
+  std::atomic<bool> done{false};
+  stereo_fabmap_slam::DetectLoop unknown, known;
+  bool unknown_called = false, known_called = false;
+  std::thread caller([&] {
+    ros::ServiceClient client = node.serviceClient<stereo_fabmap_slam::DetectLoop>("/detect_loop");
+    while (!done && !client.waitForExistence(ros::Duration(0.5))) {
+    }
+    unknown.request.keyframe_id = 1000000;
+    unknown_called = client.call(unknown);
+    while (!done) {
+      std::int64_t query = -1;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!loops.empty()) query = static_cast<std::int64_t>(loops.front().query_id);
+      }
+      if (query >= 0) {
+        known.request.keyframe_id = query;
+        known_called = client.call(known);
+        return;
+      }
+      ros::WallDuration(0.2).sleep();
+    }
+  });
+  const int status =
+      std::system(("roslaunch --wait stereo_fabmap_slam euroc_bag.launch bag:=" + sequence +
+                   "/sequence.bag calibration:=" + sequence + "/stereo_calibration.yaml > " +
+                   temp.path() + "/roslaunch.log 2>&1")
+                      .c_str());
+  done = true;
+  caller.join();
+  ros::WallDuration(0.5).sleep();
+  spinner.stop();
+  const std::string log = ReadTextFile(temp.path() + "/roslaunch.log");
+  EXPECT_EQ(status, 0) << log;
+
+  std::lock_guard<std::mutex> lock(mutex);
+  RecordProperty("loop_edges", static_cast<int>(loops.size()));
+  EXPECT_GE(loops.size(), 1u) << log;
+  EXPECT_GT(map_to_odom, 0);
+  EXPECT_GE(graph_loop_edges, 1);
+  for (const auto& loop : loops) {
+    EXPECT_NE(loop.query_id, loop.match_id);
+    EXPECT_GE(loop.inliers, 40);
+  }
+  ASSERT_TRUE(unknown_called);
+  EXPECT_FALSE(unknown.response.success);
+  EXPECT_NE(unknown.response.message.find("not in the map"), std::string::npos)
+      << unknown.response.message;
+  ASSERT_TRUE(known_called) << "no loop edge arrived while the graph ran";
+  EXPECT_TRUE(known.response.success) << known.response.message;
+  EXPECT_FALSE(known.response.candidate_ids.empty());
+  EXPECT_EQ(known.response.candidate_ids.size(), known.response.candidate_probabilities.size());
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "loop_closing_ros_test");
+  return RUN_ALL_TESTS();
+}
