@@ -1,60 +1,24 @@
 // Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model.
 #include "stereo_fabmap_slam/odometry/tracker.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+
+#include "stereo_world.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
-const geometry::StereoCamera kCamera{cv::Size(752, 480), 458.0, 458.0, 376.0, 240.0, 0.11};
+const geometry::StereoCamera& kCamera = kTestCamera;
 
-// A world of points with distinct random binary descriptors (64 bytes: ~256 bits apart, far
-// beyond the match limit, so every match is the true one).
-struct World {
-  std::vector<Eigen::Vector3d> points;
-  cv::Mat descriptors;
-};
-
-World MakeWorld(int count) {
-  std::mt19937 random(3);
-  std::uniform_real_distribution<double> lateral(-2.5, 2.5), depth(3.0, 8.0);
-  World world;
-  world.descriptors = cv::Mat(count, 64, CV_8U);
-  cv::RNG rng(5);
-  rng.fill(world.descriptors, cv::RNG::UNIFORM, 0, 256);
-  for (int i = 0; i < count; ++i) {
-    world.points.emplace_back(lateral(random), 0.6 * lateral(random), depth(random));
-  }
+StereoWorld MakeWorld(int count) {
+  StereoWorld world;
+  world.Add(RandomPoints(count, 3), 5);
   return world;
 }
 
-// What the extractor would find in a frame taken at T_world_camera: every visible point with
-// its stereo match.
-features::StereoFeatures Observe(const World& world, const Eigen::Isometry3d& T_world_camera) {
-  features::StereoFeatures features;
-  std::vector<int> rows;
-  for (int i = 0; i < static_cast<int>(world.points.size()); ++i) {
-    const Eigen::Vector3d c = T_world_camera.inverse() * world.points[i];
-    if (c.z() < 0.5) continue;
-    const Eigen::Vector3d uvr = kCamera.Project(c);
-    if (uvr.x() < 0 || uvr.y() < 0 || uvr.x() >= 752 || uvr.y() >= 480 || uvr.z() < 0) continue;
-    features.keypoints.emplace_back(static_cast<float>(uvr.x()), static_cast<float>(uvr.y()), 7.f);
-    features.u_right.push_back(static_cast<float>(uvr.z()));
-    features.points.push_back(c);
-    rows.push_back(i);
-  }
-  features.descriptors = cv::Mat(static_cast<int>(rows.size()), 64, CV_8U);
-  for (std::size_t k = 0; k < rows.size(); ++k) {
-    world.descriptors.row(rows[k]).copyTo(features.descriptors.row(static_cast<int>(k)));
-  }
-  return features;
-}
-
 TEST(Tracker, ApplyUpdateMovesTheMapAndTheMotionModel) {
-  const World world = MakeWorld(300);
+  const StereoWorld world = MakeWorld(300);
   odometry::TrackerOptions options;
   options.parallel = false;
   odometry::Tracker tracker(options, odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,

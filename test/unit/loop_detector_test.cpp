@@ -1,0 +1,190 @@
+// LoopDetector's geometric verification on stereo worlds with known geometry: a true revisit is
+// accepted with the right relative pose; look-alikes elsewhere, which match perfectly by
+// themselves, are rejected: a repeated room by the odometry check within one segment, a
+// repeated poster by the spread check even across segments (where no odometry relates the two
+// keyframes).
+#include "stereo_fabmap_slam/place_recognition/loop_detector.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "stereo_world.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+using place_recognition::LoopCandidate;
+using place_recognition::LoopDetection;
+
+// A small vocabulary and Chow-Liu tree trained on random descriptors: FAB-MAP is not what these
+// tests measure (every stored keyframe is verified: min_probability 0).
+place_recognition::LoopDetector MakeDetector() {
+  cv::Mat training(400, 64, CV_8U);
+  cv::RNG rng(11);
+  rng.fill(training, cv::RNG::UNIFORM, 0, 256);
+  place_recognition::VocabularyOptions vocabulary_options;
+  vocabulary_options.branching = 4;
+  vocabulary_options.depth = 2;
+  place_recognition::Vocabulary vocabulary =
+      place_recognition::Vocabulary::Train(training, vocabulary_options);
+  std::vector<std::vector<int>> word_sets;
+  for (int image = 0; image < 8; ++image) {
+    word_sets.push_back(vocabulary.WordSet(training.rowRange(image * 50, image * 50 + 50)));
+  }
+  place_recognition::FabMap fabmap(
+      place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size()),
+      place_recognition::FabMapOptions());
+  place_recognition::LoopDetectorOptions options;
+  options.min_age = 5.0;
+  options.min_probability = 0.0;
+  options.max_candidates = 5;
+  return place_recognition::LoopDetector(options, std::move(vocabulary), std::move(fabmap),
+                                         kTestCamera, cv::NORM_HAMMING, 60.0);
+}
+
+Eigen::Isometry3d At(double x, double y, double z) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(x, y, z);
+  return pose;
+}
+
+map::Keyframe MakeKeyframe(std::int64_t id, double time, const StereoWorld& world,
+                           const Eigen::Isometry3d& true_pose, const Eigen::Isometry3d& odometry,
+                           bool starts_new_map = false) {
+  map::Keyframe keyframe;
+  keyframe.id = id;
+  keyframe.timestamp = time;
+  keyframe.T_world_camera = odometry;
+  keyframe.starts_new_map = starts_new_map;
+  keyframe.features = Observe(world, true_pose);
+  keyframe.map_point_ids.assign(keyframe.features.size(), -1);
+  keyframe.place_descriptors = cv::Mat(50, 64, CV_8U);
+  cv::RNG rng(static_cast<std::uint64_t>(100 + id));
+  rng.fill(keyframe.place_descriptors, cv::RNG::UNIFORM, 0, 256);
+  return keyframe;
+}
+
+const LoopCandidate* CandidateFor(const LoopDetection& detection, std::int64_t keyframe) {
+  for (const LoopCandidate& candidate : detection.candidates) {
+    if (candidate.keyframe_id == keyframe) return &candidate;
+  }
+  return nullptr;
+}
+
+// A poster: a plane of 80 points 3 m ahead of the camera that sees it, filling the top-left
+// quarter of the image (4 of the 16 spread cells).
+std::vector<Eigen::Vector3d> Poster(const Eigen::Vector3d& origin) {
+  std::vector<Eigen::Vector3d> points;
+  for (int row = 0; row < 8; ++row) {
+    for (int col = 0; col < 10; ++col) {
+      // u from ~30 to ~330 px, v from ~30 to ~200 px at 3 m depth.
+      points.push_back(origin + Eigen::Vector3d(-2.3 + 0.22 * col, -1.37 + 0.16 * row, 3.0));
+    }
+  }
+  return points;
+}
+
+// Places A (origin) and B (20 m along x) each with its own surroundings, and the same poster
+// (same descriptors, same geometry) in view at both.
+StereoWorld PosterWorld() {
+  StereoWorld world;
+  const std::vector<Eigen::Vector3d> poster_a = Poster(Eigen::Vector3d::Zero());
+  const int first = world.Add(poster_a, 1);
+  const cv::Mat poster_descriptors =
+      world.descriptors.rowRange(first, first + static_cast<int>(poster_a.size())).clone();
+  world.Add(RandomPoints(200, 2), 3);  // A's surroundings
+  std::vector<Eigen::Vector3d> poster_b = Poster(Eigen::Vector3d(20, 0, 0));
+  world.Add(poster_b, poster_descriptors);
+  std::vector<Eigen::Vector3d> surroundings_b = RandomPoints(200, 4);
+  for (Eigen::Vector3d& p : surroundings_b) p.x() += 20;
+  world.Add(surroundings_b, 5);
+  return world;
+}
+
+TEST(LoopDetector, TrueRevisitIsAcceptedWithItsRelativePose) {
+  const StereoWorld world = PosterWorld();
+  place_recognition::LoopDetector detector = MakeDetector();
+  detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+  detector.Process(MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(20, 0, 0)));
+  // Back at A, 10 cm beside the first view; the odometry has drifted 15 cm over the 40 m.
+  const LoopDetection detection =
+      detector.Process(MakeKeyframe(2, 20.0, world, At(0.1, 0, 0), At(0.25, 0, 0)));
+  const LoopCandidate* a = CandidateFor(detection, 0);
+  ASSERT_NE(a, nullptr);
+  EXPECT_TRUE(a->accepted) << a->reason;
+  ASSERT_TRUE(detection.loop.has_value());
+  EXPECT_EQ(detection.loop->match_id, 0);
+  EXPECT_EQ(detection.loop->query_id, 2);
+  // Exact features: the relative pose is the true one to well under a millimetre.
+  EXPECT_LT((detection.loop->T_match_query.translation() - Eigen::Vector3d(0.1, 0, 0)).norm(),
+            1e-3);
+  EXPECT_GE(detection.loop->inliers, 200);
+}
+
+// A room repeated exactly 20 m further on (the same objects in the same layout, as in an office
+// building's identical floors): a view at B matches A over the whole image.
+StereoWorld RepeatedRoomWorld() {
+  StereoWorld world;
+  std::vector<Eigen::Vector3d> room = RandomPoints(250, 2);
+  const int first = world.Add(room, 3);
+  const cv::Mat room_descriptors =
+      world.descriptors.rowRange(first, first + static_cast<int>(room.size())).clone();
+  for (Eigen::Vector3d& p : room) p.x() += 20;
+  world.Add(room, room_descriptors);
+  return world;
+}
+
+TEST(LoopDetector, RepeatedRoomWithinASegmentIsRejectedByTheOdometry) {
+  const StereoWorld world = RepeatedRoomWorld();
+  place_recognition::LoopDetector detector = MakeDetector();
+  detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+  // At B the view is identical to A's; the odometry says 20 m lie between them (5 cm drift).
+  const LoopDetection detection =
+      detector.Process(MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(20.05, 0, 0)));
+  const LoopCandidate* a = CandidateFor(detection, 0);
+  ASSERT_NE(a, nullptr);
+  EXPECT_GE(a->inliers, 200);  // geometrically perfect: only the odometry can tell
+  EXPECT_FALSE(a->accepted);
+  EXPECT_NE(a->reason.find("disagrees with the odometry"), std::string::npos) << a->reason;
+  EXPECT_FALSE(detection.loop.has_value());
+}
+
+TEST(LoopDetector, RepeatedPosterAcrossSegmentsIsRejectedByItsSpread) {
+  const StereoWorld world = PosterWorld();
+  place_recognition::LoopDetector detector = MakeDetector();
+  detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+  // Tracking was lost on the way: no odometry relates B to A.
+  const LoopDetection detection = detector.Process(
+      MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(0, 0, 0), /*starts_new_map=*/true));
+  const LoopCandidate* a = CandidateFor(detection, 0);
+  ASSERT_NE(a, nullptr);
+  EXPECT_FALSE(a->accepted);
+  EXPECT_NE(a->reason.find("image cells"), std::string::npos) << a->reason;
+  EXPECT_FALSE(detection.loop.has_value());
+}
+
+TEST(LoopDetector, RecentKeyframesAreNoCandidates) {
+  const StereoWorld world = PosterWorld();
+  place_recognition::LoopDetector detector = MakeDetector();
+  detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+  // 2 s later at the same place: within min_age (5 s), not a loop.
+  const LoopDetection detection =
+      detector.Process(MakeKeyframe(1, 2.0, world, At(0.1, 0, 0), At(0.1, 0, 0)));
+  EXPECT_TRUE(detection.candidates.empty());
+}
+
+TEST(LoopDetector, PlaceDescriptorsOfAnotherTypeAreRefused) {
+  const StereoWorld world = PosterWorld();
+  place_recognition::LoopDetector detector = MakeDetector();
+  map::Keyframe keyframe = MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0));
+  keyframe.place_descriptors = cv::Mat(50, 32, CV_32F, cv::Scalar(0.5f));  // float, 128 bytes
+  try {
+    detector.Process(keyframe);
+    FAIL() << "float descriptors accepted by a binary vocabulary";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("vocabulary"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
