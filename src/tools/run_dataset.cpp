@@ -18,7 +18,7 @@
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
-#include "stereo_fabmap_slam/pipeline/stereo_odometry.h"
+#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 
 namespace {
 
@@ -77,21 +77,21 @@ struct LoopCounts {
 };
 
 // One row per verified candidate; times in seconds as in the trajectory files.
-LoopCounts WriteLoops(const pipeline::StereoOdometry& odometry, const std::string& path) {
+LoopCounts WriteLoops(const pipeline::StereoSlam& slam, const std::string& path) {
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (file == nullptr) throw std::runtime_error("cannot write " + path);
   std::fprintf(file,
                "query_keyframe,query_time,match_keyframe,match_time,probability,inliers,accepted,"
                "reason\n");
   LoopCounts counts;
-  for (const pipeline::FrameRecord& frame : odometry.frames()) {
+  for (const pipeline::FrameRecord& frame : slam.frames()) {
     if (!frame.loop_detection) continue;
     counts.detection_ms.push_back(frame.timing.loop_detection_ms);
     counts.pose_graph_ms_max = std::max(counts.pose_graph_ms_max, frame.timing.pose_graph_ms);
     for (const place_recognition::LoopCandidate& c : frame.loop_detection->candidates) {
       std::fprintf(file, "%ld,%.9f,%ld,%.9f,%.6f,%d,%d,\"%s\"\n",
                    static_cast<long>(frame.loop_detection->query_id), frame.timestamp,
-                   static_cast<long>(c.keyframe_id), odometry.KeyframeTime(c.keyframe_id),
+                   static_cast<long>(c.keyframe_id), slam.KeyframeTime(c.keyframe_id),
                    c.probability, c.inliers, c.accepted ? 1 : 0, c.reason.c_str());
       ++(c.accepted ? counts.accepted : counts.rejected);
     }
@@ -168,13 +168,12 @@ int main(int argc, char** argv) {
     }
     std::filesystem::create_directories(output);
 
-    pipeline::StereoOdometry odometry(options.front_end, options.bundle_adjustment, rectifier,
-                                      NowMs);
+    pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier, NowMs);
     if (loop_closing) {
-      odometry.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
-                                     *place_options, options.loop_detection, rectifier.camera(),
-                                     odometry.descriptor_norm(), odometry.max_match_distance()),
-                                 options.pose_graph);
+      slam.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
+                                 *place_options, options.loop_detection, rectifier.camera(),
+                                 slam.descriptor_norm(), slam.max_match_distance()),
+                             options.pose_graph);
     }
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
@@ -183,27 +182,27 @@ int main(int argc, char** argv) {
       const datasets::StereoImages images = sequence.LoadStereoPair(i);
       const double start = NowMs();
       const pipeline::FrameRecord& frame =
-          odometry.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+          slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
       processing_ms += NowMs() - start;
       if (!quiet && (frame.state == odometry::TrackingState::kLost || (i + 1) % 100 == 0)) {
         std::printf("frame %zu/%zu: %s, %zu keyframes\n", i + 1, sequence.size(),
-                    odometry::TrackingStateName(frame.state), odometry.keyframe_count());
+                    odometry::TrackingStateName(frame.state), slam.keyframe_count());
       }
     }
     const double wall_s = (NowMs() - wall_start) / 1000.0;
     const double cpu_s = CpuSeconds() - cpu_start;
 
-    const evaluation::Trajectory trajectory = odometry.MapTrajectory();
-    const evaluation::Trajectory odometry_trajectory = odometry.CameraTrajectory();
+    const evaluation::Trajectory trajectory = slam.MapTrajectory();
+    const evaluation::Trajectory odometry_trajectory = slam.OdometryTrajectory();
     evaluation::WriteTumTrajectory(trajectory, output + "/trajectory.txt");
     evaluation::WriteTumTrajectory(odometry_trajectory, output + "/odometry.txt");
-    const LoopCounts loops = WriteLoops(odometry, output + "/loops.csv");
-    evaluation::WriteTumTrajectory(odometry.KeyframeTrajectory(), output + "/keyframes.txt");
-    WriteTiming(odometry.frames(), output + "/timing.csv");
+    const LoopCounts loops = WriteLoops(slam, output + "/loops.csv");
+    evaluation::WriteTumTrajectory(slam.KeyframeTrajectory(), output + "/keyframes.txt");
+    WriteTiming(slam.frames(), output + "/timing.csv");
 
     std::vector<double> stage[7];
     int tracked = 0;
-    for (const pipeline::FrameRecord& f : odometry.frames()) {
+    for (const pipeline::FrameRecord& f : slam.frames()) {
       tracked += f.state != odometry::TrackingState::kLost ? 1 : 0;
       const pipeline::FrameTiming& t = f.timing;
       const double values[7] = {t.rectification_ms, t.detection_ms, t.description_ms,
@@ -222,7 +221,7 @@ int main(int argc, char** argv) {
     std::string json = "{\"sequence\": \"" + name +
                        "\", \"frames\": " + std::to_string(sequence.size()) +
                        ", \"frames_tracked\": " + std::to_string(tracked) +
-                       ", \"keyframes\": " + std::to_string(odometry.keyframe_count());
+                       ", \"keyframes\": " + std::to_string(slam.keyframe_count());
     char buffer[256];
     std::snprintf(buffer, sizeof(buffer),
                   ", \"wall_time_s\": %.3f, \"processing_time_s\": %.3f, \"cpu_time_s\": %.3f, "

@@ -12,7 +12,7 @@
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
-#include "stereo_fabmap_slam/pipeline/stereo_odometry.h"
+#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -256,7 +256,7 @@ TEST(SyntheticWorld, OdometryOnARenderedLoop) {
   const datasets::EurocSequence sequence = datasets::EurocSequence::Open(temp.path());
   const camera::StereoRectifier rectifier =
       camera::StereoRectifier::FromCalibration(sequence.calibration());
-  pipeline::StereoOdometry odometry(pipeline::FrontEndOptions{}, backend::BundleAdjustmentOptions{},
+  pipeline::StereoSlam odometry(pipeline::FrontEndOptions{}, backend::BundleAdjustmentOptions{},
                                     rectifier, [] { return 0.0; });
   int tracked = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
@@ -270,7 +270,7 @@ TEST(SyntheticWorld, OdometryOnARenderedLoop) {
   const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
       sequence.ground_truth(), rectifier.T_body_rectified_left());
   const evaluation::EvaluationResult result = evaluation::EvaluateTrajectory(
-      truth, odometry.CameraTrajectory(), evaluation::EvaluationOptions{});
+      truth, odometry.OdometryTrajectory(), evaluation::EvaluationOptions{});
   RecordProperty("ate_rmse_m", std::to_string(result.ate.rmse));
   EXPECT_EQ(result.matched, sequence.size());
   EXPECT_LT(result.ate.rmse, 0.03);

@@ -1,29 +1,28 @@
-#include "stereo_fabmap_slam/pipeline/stereo_odometry.h"
+#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 
 namespace stereo_fabmap_slam::pipeline {
 
-StereoOdometry::StereoOdometry(const FrontEndOptions& front_end_options,
-                               const backend::BundleAdjustmentOptions& bundle_adjustment_options,
-                               const camera::StereoRectifier& rectifier, Clock clock)
+StereoSlam::StereoSlam(const FrontEndOptions& front_end_options,
+                       const backend::BundleAdjustmentOptions& bundle_adjustment_options,
+                       const camera::StereoRectifier& rectifier, Clock clock)
     : clock_(clock),
       front_end_(front_end_options, rectifier, clock),
-      bundle_adjuster_(bundle_adjustment_options, rectifier.camera()) {}
+      backend_(bundle_adjustment_options, rectifier.camera(), clock) {}
 
-const FrameRecord& StereoOdometry::ProcessFrame(double timestamp, const cv::Mat& left_raw,
-                                                const cv::Mat& right_raw) {
+const FrameRecord& StereoSlam::ProcessFrame(double timestamp, const cv::Mat& left_raw,
+                                            const cv::Mat& right_raw) {
   FrontEndOutput output = front_end_.Process(timestamp, left_raw, right_raw);
   const odometry::TrackingResult& result = output.tracking;
   FrameRecord record;
   record.timestamp = timestamp;
   record.timing = output.timing;
   if (result.keyframe) {
-    const double start = clock_();
     keyframe_times_[result.keyframe->id] = timestamp;
-    const map::KeyframeUpdate update = bundle_adjuster_.AddKeyframe(*result.keyframe);
-    front_end_.ApplyUpdate(update);
-    record.timing.bundle_adjustment_ms = clock_() - start;
+    const BackendOutput adjusted = backend_.Process(*result.keyframe);
+    front_end_.ApplyUpdate(adjusted.update);
+    record.timing.bundle_adjustment_ms = adjusted.bundle_adjustment_ms;
     if (loop_closing_) {
-      LoopClosingOutput closing = loop_closing_->Process(*result.keyframe, update);
+      LoopClosingOutput closing = loop_closing_->Process(*result.keyframe, adjusted.update);
       record.timing.loop_detection_ms = closing.detection_ms;
       record.timing.pose_graph_ms = closing.pose_graph_ms;
       record.loop_detection = std::move(closing.detection);
@@ -40,8 +39,8 @@ const FrameRecord& StereoOdometry::ProcessFrame(double timestamp, const cv::Mat&
   return frames_.back();
 }
 
-evaluation::Trajectory StereoOdometry::CameraTrajectory() const {
-  const std::map<std::int64_t, Eigen::Isometry3d> keyframes = bundle_adjuster_.KeyframePoses();
+evaluation::Trajectory StereoSlam::OdometryTrajectory() const {
+  const std::map<std::int64_t, Eigen::Isometry3d> keyframes = backend_.KeyframePoses();
   evaluation::Trajectory trajectory;
   for (const FrameRecord& frame : frames_) {
     const auto keyframe = keyframes.find(frame.reference_keyframe);
@@ -52,13 +51,13 @@ evaluation::Trajectory StereoOdometry::CameraTrajectory() const {
   return trajectory;
 }
 
-void StereoOdometry::EnableLoopClosing(place_recognition::LoopDetector detector,
-                                       const backend::PoseGraphOptions& pose_graph_options) {
+void StereoSlam::EnableLoopClosing(place_recognition::LoopDetector detector,
+                                   const backend::PoseGraphOptions& pose_graph_options) {
   loop_closing_.emplace(std::move(detector), pose_graph_options, clock_);
 }
 
-evaluation::Trajectory StereoOdometry::MapTrajectory() const {
-  if (!loop_closing_) return CameraTrajectory();
+evaluation::Trajectory StereoSlam::MapTrajectory() const {
+  if (!loop_closing_) return OdometryTrajectory();
   const backend::PoseGraph& graph = loop_closing_->pose_graph();
   evaluation::Trajectory trajectory;
   for (const FrameRecord& frame : frames_) {
@@ -73,10 +72,10 @@ evaluation::Trajectory StereoOdometry::MapTrajectory() const {
   return trajectory;
 }
 
-evaluation::Trajectory StereoOdometry::KeyframeTrajectory() const {
+evaluation::Trajectory StereoSlam::KeyframeTrajectory() const {
   evaluation::Trajectory trajectory;
   const std::map<std::int64_t, Eigen::Isometry3d> poses =
-      loop_closing_ ? loop_closing_->pose_graph().MapPoses() : bundle_adjuster_.KeyframePoses();
+      loop_closing_ ? loop_closing_->pose_graph().MapPoses() : backend_.KeyframePoses();
   for (const auto& [id, pose] : poses) {
     trajectory.push_back({keyframe_times_.at(id), pose});
   }

@@ -7,9 +7,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/evaluation/trajectory.h"
+#include "stereo_fabmap_slam/pipeline/backend.h"
 #include "stereo_fabmap_slam/pipeline/loop_closing.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 
@@ -28,16 +28,18 @@ struct FrameRecord {
   std::optional<place_recognition::LoopDetection> loop_detection;  // keyframes, loop closing on
 };
 
-// The whole odometry in one thread, frame by frame: the front end, and on a keyframe the
-// windowed bundle adjustment, whose update goes straight back to the tracker. The same input
-// gives the same output. The clock (milliseconds) is only read to fill FrameTiming.
-class StereoOdometry {
+// The whole SLAM in one thread, frame by frame, through the stages the nodelets run apart:
+// the front end; on a keyframe the backend (windowed bundle adjustment), whose update goes
+// straight back to the tracker; then, if enabled, loop closing (FAB-MAP, verification, pose
+// graph). The same input gives the same output. The clock (milliseconds) is only read to fill
+// FrameTiming.
+class StereoSlam {
  public:
   using Clock = StereoFrontEnd::Clock;
 
-  StereoOdometry(const FrontEndOptions& front_end_options,
-                 const backend::BundleAdjustmentOptions& bundle_adjustment_options,
-                 const camera::StereoRectifier& rectifier, Clock clock);
+  StereoSlam(const FrontEndOptions& front_end_options,
+             const backend::BundleAdjustmentOptions& bundle_adjustment_options,
+             const camera::StereoRectifier& rectifier, Clock clock);
 
   // Turns loop closing on (before the first frame). The front end must make place descriptors
   // (FrontEndOptions::place_features).
@@ -51,7 +53,7 @@ class StereoOdometry {
   // Every frame's rectified left camera pose, through its keyframe's latest optimised pose: in
   // odom (the odometry, without loop closing) and in map (after loop closing; the same as the
   // odometry while no loop was closed or loop closing is off).
-  evaluation::Trajectory CameraTrajectory() const;
+  evaluation::Trajectory OdometryTrajectory() const;
   evaluation::Trajectory MapTrajectory() const;
   evaluation::Trajectory KeyframeTrajectory() const;
   const std::vector<FrameRecord>& frames() const { return frames_; }
@@ -63,7 +65,7 @@ class StereoOdometry {
  private:
   Clock clock_;
   StereoFrontEnd front_end_;
-  backend::LocalBundleAdjuster bundle_adjuster_;
+  Backend backend_;
   std::optional<LoopClosing> loop_closing_;
   std::vector<FrameRecord> frames_;
   std::map<std::int64_t, double> keyframe_times_;
