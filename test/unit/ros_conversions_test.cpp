@@ -154,8 +154,7 @@ TEST(RosConversions, LoopEdgeRoundTrip) {
   map::LoopEdge edge;
   edge.query_id = 120;
   edge.match_id = 7;
-  edge.T_match_query.linear() =
-      Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  edge.T_match_query.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   edge.T_match_query.translation() = Eigen::Vector3d(0.3, -0.1, 0.05);
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) edge.information(r, c) = r == c ? 100.0 + r : 0.5 * (r + c);

@@ -257,7 +257,7 @@ TEST(SyntheticWorld, OdometryOnARenderedLoop) {
   const camera::StereoRectifier rectifier =
       camera::StereoRectifier::FromCalibration(sequence.calibration());
   pipeline::StereoSlam odometry(pipeline::FrontEndOptions{}, backend::BundleAdjustmentOptions{},
-                                    rectifier, [] { return 0.0; });
+                                rectifier, [] { return 0.0; });
   int tracked = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const datasets::StereoImages images = sequence.LoadStereoPair(i);
