@@ -164,7 +164,7 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
           Detector(request.keyframe)
               .Process(ros_conversions::FromKeyframeMessage(request.keyframe), request.add_to_map);
     }
-    if (detector_->places() == 0) {
+    if (detection.places_compared == 0) {
       response.message = "the map has no place old enough to compare with";
       response.new_place_probability = 1;
       response.success = false;

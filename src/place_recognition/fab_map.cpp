@@ -311,6 +311,52 @@ FabMapResult FabMap::Compare(const std::vector<int>& words) const {
   return result;
 }
 
+FabMapResult FabMap::Compare(const std::vector<int>& words,
+                             const std::vector<char>& candidates) const {
+  if (static_cast<int>(candidates.size()) != places_.database.size()) {
+    throw std::invalid_argument("FabMap::Compare: " + std::to_string(candidates.size()) +
+                                " candidate flags for " + std::to_string(places_.database.size()) +
+                                " places");
+  }
+  const Query query = Prepare(words);
+  FabMapResult result;
+  result.log_likelihoods = LogLikelihoods(places_, query);
+  result.new_place_log_likelihood = NewPlaceLogLikelihood(query);
+  const int places = static_cast<int>(result.log_likelihoods.size());
+  result.posterior.assign(static_cast<std::size_t>(places), 0.0);
+  const int n = static_cast<int>(std::count(candidates.begin(), candidates.end(), char{1}));
+  if (n == 0) return result;
+
+  // As Compare with a uniform prior, over the candidates only.
+  const double log_uniform = std::log((1 - options_.new_place_prior) / n);
+  const double log_new = result.new_place_log_likelihood + std::log(options_.new_place_prior);
+  double top = log_new;
+  for (int i = 0; i < places; ++i) {
+    if (candidates[i]) top = std::max(top, result.log_likelihoods[i] + log_uniform);
+  }
+  double sum = 0;
+  for (int i = 0; i < places; ++i) {
+    if (!candidates[i]) continue;
+    result.posterior[i] = std::exp(result.log_likelihoods[i] + log_uniform - top);
+    sum += result.posterior[i];
+  }
+  const double new_joint = std::exp(log_new - top);
+  sum += new_joint;
+  const double uniform = (1 - options_.smoothing) / (n + 1);
+  const double scale = options_.smoothing / sum;
+  double best = -1;
+  for (int i = 0; i < places; ++i) {
+    if (!candidates[i]) continue;
+    result.posterior[i] = scale * result.posterior[i] + uniform;
+    if (result.posterior[i] > best) {
+      best = result.posterior[i];
+      result.best = i;
+    }
+  }
+  result.new_place = scale * new_joint + uniform;
+  return result;
+}
+
 int FabMap::AddPlace(const std::vector<int>& words) {
   const int index = places_.database.AddPlace(words);
   places_.hit_sums.push_back(HitSum(places_.database.place(index)));

@@ -6,8 +6,8 @@
 #include <numeric>
 #include <stdexcept>
 
-#include <opencv2/features2d.hpp>
-
+#include "stereo_fabmap_slam/features/descriptor_matching.h"
+#include "stereo_fabmap_slam/geometry/image_coverage.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/odometry/pose_refiner.h"
 
@@ -58,8 +58,6 @@ std::vector<int> LoopDetector::Words(const map::Keyframe& keyframe) const {
 
 LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
   std::vector<int> words = Words(keyframe);
-  const double time = keyframe.timestamp;
-  AdmitPlaces(time);
   if (!add_to_map) {
     // Compared without being stored: it has no place on the odometry path to check against.
     map::StoredKeyframe query;
@@ -69,8 +67,9 @@ LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
     return Detect(query);
   }
   const map::StoredKeyframe& stored = database_.Add(std::move(keyframe), std::move(words));
-  waiting_.push_back(stored.keyframe.id);
-  return Detect(stored);
+  LoopDetection detection = Detect(stored);
+  AddPlace(stored);
+  return detection;
 }
 
 LoopDetection LoopDetector::DetectStored(std::int64_t keyframe_id) {
@@ -78,37 +77,55 @@ LoopDetection LoopDetector::DetectStored(std::int64_t keyframe_id) {
   return Detect(stored);
 }
 
-void LoopDetector::AdmitPlaces(double time) {
-  while (!waiting_.empty() &&
-         database_.Get(waiting_.front()).keyframe.timestamp <= time - options_.min_age) {
-    fabmap_.AddPlace(database_.Get(waiting_.front()).words);
-    place_keyframes_.push_back(waiting_.front());
-    waiting_.pop_front();
+void LoopDetector::AddPlace(const map::StoredKeyframe& stored) {
+  fabmap_.AddPlace(stored.words);
+  place_keyframes_.push_back(stored.keyframe.id);
+}
+
+PlaceQuery LoopDetector::Candidates(const std::vector<int>& words,
+                                    const std::function<bool(const map::StoredKeyframe&)>& allowed,
+                                    int max_candidates, double min_probability) const {
+  PlaceQuery query;
+  std::vector<char> mask(place_keyframes_.size(), 0);
+  for (std::size_t i = 0; i < place_keyframes_.size(); ++i) {
+    mask[i] = allowed(database_.Get(place_keyframes_[i])) ? 1 : 0;
   }
+  query.places_compared = static_cast<int>(std::count(mask.begin(), mask.end(), 1));
+  if (query.places_compared == 0 || words.empty()) return query;
+  const FabMapResult result = fabmap_.Compare(words, mask);
+  query.new_place_probability = result.new_place;
+  std::vector<int> order;
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    if (mask[i] && result.posterior[i] >= min_probability) order.push_back(static_cast<int>(i));
+  }
+  // Best first; equal posteriors in map order, so that the result is deterministic.
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return result.posterior[a] > result.posterior[b] ||
+           (result.posterior[a] == result.posterior[b] && a < b);
+  });
+  if (static_cast<int>(order.size()) > max_candidates) order.resize(max_candidates);
+  for (const int place : order) {
+    query.candidates.push_back({place_keyframes_[place], result.posterior[place]});
+  }
+  return query;
 }
 
 LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
   const double query_time = query.keyframe.timestamp;
   LoopDetection detection;
   detection.query_id = query.keyframe.id;
-  if (place_keyframes_.empty() || query.words.empty()) return detection;
-  const FabMapResult result = fabmap_.Compare(query.words);
-  detection.new_place_probability = result.new_place;
-
-  std::vector<int> order(result.posterior.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return result.posterior[a] > result.posterior[b] ||
-           (result.posterior[a] == result.posterior[b] && a < b);
-  });
-  for (const int place : order) {
-    if (static_cast<int>(detection.candidates.size()) >= options_.max_candidates) break;
-    if (result.posterior[place] < options_.min_probability) break;
-    const map::StoredKeyframe& candidate = database_.Get(place_keyframes_[place]);
-    // A query of a stored keyframe sees places newer than itself too: the window holds both ways.
-    if (std::abs(candidate.keyframe.timestamp - query_time) < options_.min_age) continue;
-    LoopCandidate verified = Verify(query, candidate);
-    verified.probability = result.posterior[place];
+  // Keyframes within min_age of the query (either way: a stored query sees newer ones too) are
+  // no places to return to; the posterior is taken over the others only.
+  const auto old_enough = [&](const map::StoredKeyframe& place) {
+    return std::abs(place.keyframe.timestamp - query_time) >= options_.min_age;
+  };
+  const PlaceQuery places =
+      Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability);
+  detection.new_place_probability = places.new_place_probability;
+  detection.places_compared = places.places_compared;
+  for (const PlaceCandidate& place : places.candidates) {
+    LoopCandidate verified = Verify(query, database_.Get(place.keyframe_id));
+    verified.probability = place.probability;
     verified.edge.probability = verified.probability;
     if (verified.accepted && (!detection.loop || verified.inliers > detection.loop->inliers)) {
       detection.loop = verified.edge;
@@ -139,23 +156,18 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   for (std::size_t k = 0; k < candidate_rows.size(); ++k) {
     c.descriptors.row(candidate_rows[k]).copyTo(candidate_descriptors.row(static_cast<int>(k)));
   }
-  cv::BFMatcher matcher(descriptor_norm_);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(q.descriptors, candidate_descriptors, knn, 2);
   std::vector<geometry::PnpCorrespondence> correspondences;
   std::vector<odometry::PoseObservation> observations;
-  std::vector<int> query_keypoints;
-  for (const std::vector<cv::DMatch>& pair : knn) {
-    if (pair.empty() || pair[0].distance > max_descriptor_distance_) continue;
-    if (pair.size() > 1 && pair[0].distance >= options_.match_ratio * pair[1].distance) continue;
-    const std::size_t qi = static_cast<std::size_t>(pair[0].queryIdx);
+  for (const cv::DMatch& match :
+       features::RatioTestMatches(q.descriptors, candidate_descriptors, descriptor_norm_,
+                                  max_descriptor_distance_, options_.match_ratio)) {
+    const std::size_t qi = static_cast<std::size_t>(match.queryIdx);
     const Eigen::Vector3d& point =
-        c.points[static_cast<std::size_t>(candidate_rows[pair[0].trainIdx])];
+        c.points[static_cast<std::size_t>(candidate_rows[match.trainIdx])];
     const cv::Point2f& pixel = q.keypoints[qi].pt;
     correspondences.push_back(
         {point, Eigen::Vector2d(pixel.x, pixel.y), q.HasDepth(qi), q.points[qi]});
     observations.push_back({point, pixel.x, pixel.y, q.u_right[qi]});
-    query_keypoints.push_back(static_cast<int>(qi));
   }
   result.matches = static_cast<int>(correspondences.size());
   if (result.matches < options_.min_inliers) {
@@ -185,18 +197,11 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   }
 
   // Spread: a loop seen through one small object is no loop.
-  bool cells[kSpreadGrid][kSpreadGrid] = {};
-  int occupied = 0;
+  std::vector<Eigen::Vector2d> inlier_pixels;
   for (std::size_t k = 0; k < observations.size(); ++k) {
-    if (!refined.inlier[k]) continue;
-    const int col = std::clamp(
-        static_cast<int>(observations[k].u * kSpreadGrid / camera_.size.width), 0, kSpreadGrid - 1);
-    const int row =
-        std::clamp(static_cast<int>(observations[k].v * kSpreadGrid / camera_.size.height), 0,
-                   kSpreadGrid - 1);
-    if (!cells[row][col]) ++occupied;
-    cells[row][col] = true;
+    if (refined.inlier[k]) inlier_pixels.emplace_back(observations[k].u, observations[k].v);
   }
+  const int occupied = geometry::OccupiedCells(inlier_pixels, camera_.size, kSpreadGrid);
   if (occupied < options_.min_inlier_cells) {
     result.reason = "inliers cover only " + std::to_string(occupied) + " of " +
                     std::to_string(kSpreadGrid * kSpreadGrid) + " image cells";

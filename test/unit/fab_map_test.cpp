@@ -238,6 +238,46 @@ TEST(FabMap, VersionsOneAndTwoAgreeOnARandomMap) {
   }
 }
 
+TEST(FabMap, ComparingWithASubsetEqualsAMapOfTheSubsetAlone) {
+  // 300 words, 30 places; the subset leaves out every third place, among them the one the query
+  // comes from, as loop detection leaves out the recent past.
+  RandomWordSets random_sets(300, 5);
+  const auto random_set = [&](int size) { return random_sets.Next(size); };
+  std::vector<std::vector<int>> training;
+  for (int i = 0; i < 200; ++i) training.push_back(random_set(30));
+  const ChowLiuTree tree = ChowLiuTree::Train(training, 300);
+  FabMap whole(tree, FabMapOptions{}), subset(tree, FabMapOptions{});
+  std::vector<char> candidates;
+  std::vector<std::vector<int>> places;
+  for (int i = 0; i < 30; ++i) {
+    places.push_back(random_set(40));
+    whole.AddPlace(places.back());
+    candidates.push_back(i % 3 != 0);
+    if (candidates.back()) subset.AddPlace(places.back());
+  }
+  for (const int source : {3, 4}) {
+    const std::vector<int> query(places[source].begin(), places[source].begin() + 30);
+    const FabMapResult masked = whole.Compare(query, candidates);
+    const FabMapResult alone = subset.Compare(query);
+    ASSERT_EQ(masked.posterior.size(), 30u);
+    int k = 0;
+    for (int i = 0; i < 30; ++i) {
+      if (!candidates[i]) {
+        EXPECT_EQ(masked.posterior[i], 0.0);
+        continue;
+      }
+      EXPECT_DOUBLE_EQ(masked.posterior[i], alone.posterior[k++]);
+    }
+    EXPECT_DOUBLE_EQ(masked.new_place, alone.new_place);
+    // The source place wins when it may; otherwise the answer is still one of the candidates.
+    if (candidates[source]) {
+      EXPECT_EQ(masked.best, source);
+    }
+    EXPECT_TRUE(candidates[static_cast<std::size_t>(masked.best)]);
+  }
+  EXPECT_THROW(whole.Compare(places[0], std::vector<char>(29, 1)), std::invalid_argument);
+}
+
 TEST(FabMap, AddUpdatesAMatchedPlaceAndAddsANewOne) {
   // 300 words from independent training images; views of 40 words.
   RandomWordSets random_sets(300, 4);

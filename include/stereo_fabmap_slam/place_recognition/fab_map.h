@@ -60,6 +60,12 @@ class FabMap {
          PlaceDatabase training_places = PlaceDatabase());
 
   FabMapResult Compare(const std::vector<int>& words) const;
+  // Compare over a subset of the map: `candidates[i]` (one per place) says whether place i may
+  // be the answer. The others get posterior 0 and no prior mass, as if they were not in the map,
+  // so the result equals Compare on a map of the candidates alone (uniform location prior: the
+  // motion prior follows Add's sequence, which a subset breaks). Loop detection leaves out the
+  // recent past; relocalization leaves out the piece of map it is lost in.
+  FabMapResult Compare(const std::vector<int>& words, const std::vector<char>& candidates) const;
   // Compare, then update the best place if its posterior reaches match_threshold, or add a new
   // place; `place` receives which.
   FabMapResult Add(const std::vector<int>& words, int* place = nullptr);

@@ -1,7 +1,7 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,17 +27,31 @@ struct LoopCandidate {
   map::LoopEdge edge;  // meaningful if accepted
 };
 
+// A keyframe FAB-MAP proposes for a view, with its posterior.
+struct PlaceCandidate {
+  std::int64_t keyframe_id = -1;
+  double probability = 0;
+};
+
+// FAB-MAP's answer for a view over a part of the map.
+struct PlaceQuery {
+  std::vector<PlaceCandidate> candidates;  // best first
+  double new_place_probability = 1;
+  int places_compared = 0;  // keyframes the view was compared with
+};
+
 struct LoopDetection {
   std::int64_t query_id = -1;
   double new_place_probability = 1;
+  int places_compared = 0;                // keyframes old enough to be loops
   std::vector<LoopCandidate> candidates;  // best FAB-MAP posterior first
   // The accepted candidate with the most inliers, if any.
   std::optional<map::LoopEdge> loop;
 };
 
 // Loop detection over the keyframe map: every keyframe becomes one FAB-MAP place (addressed by
-// keyframe id, never merged), and each new keyframe is compared with the places older than
-// `min_age`; the best candidates are verified geometrically against the candidate's stereo
+// keyframe id, never merged), and each new keyframe is compared with the places at least
+// `min_age` older; the best candidates are verified geometrically against the candidate's stereo
 // points. Owns the KeyframeDatabase, the one store of keyframes that relocalization reads too.
 class LoopDetector {
  public:
@@ -56,6 +70,13 @@ class LoopDetector {
   // The same query for a keyframe already in the map (std::out_of_range for an unknown id).
   LoopDetection DetectStored(std::int64_t keyframe_id);
 
+  // FAB-MAP's best places for a view's words among the keyframes `allowed` accepts (the
+  // posterior is taken over those alone): at most max_candidates with a posterior of at least
+  // min_probability, best first.
+  PlaceQuery Candidates(const std::vector<int>& words,
+                        const std::function<bool(const map::StoredKeyframe&)>& allowed,
+                        int max_candidates, double min_probability) const;
+
   // The bundle adjustment moved a keyframe (odom frame).
   void UpdatePose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
     database_.UpdatePose(id, T_odom_camera);
@@ -66,8 +87,7 @@ class LoopDetector {
  private:
   // A query of segment -1 (not stored) has no odometry to check the verified pose against.
   LoopDetection Detect(const map::StoredKeyframe& query);
-  // Keyframes at least min_age older than `time` become FAB-MAP places.
-  void AdmitPlaces(double time);
+  void AddPlace(const map::StoredKeyframe& stored);
   LoopCandidate Verify(const map::StoredKeyframe& query,
                        const map::StoredKeyframe& candidate) const;
 
@@ -79,7 +99,6 @@ class LoopDetector {
   double max_descriptor_distance_;
   map::KeyframeDatabase database_;
   std::vector<std::int64_t> place_keyframes_;  // FAB-MAP place index -> keyframe id
-  std::deque<std::int64_t> waiting_;           // in the database, too recent to be places yet
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition

@@ -1,0 +1,52 @@
+#pragma once
+
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/io/option_reader.h"
+
+namespace stereo_fabmap_slam::relocalization {
+
+// Finding a frame in the keyframe map with no idea where it is: FAB-MAP proposes keyframes, and
+// each is verified against its own and its neighbours' stereo points. There is no odometry to
+// cross-check a relocalization (that is the point of it), so the thresholds are stricter than
+// loop detection's: a wrong relocalization puts the camera in the wrong place of the map.
+struct RelocalizerOptions {
+  static constexpr char kSection[] = "relocalization";
+
+  // FAB-MAP's best keyframes, whatever their posterior: a lost camera has no prior, and after a
+  // kidnap the view may be new to FAB-MAP (posterior spread over several similar places) yet
+  // verify well. Each costs a few milliseconds of matching and RANSAC; 5 bounds an attempt.
+  int max_candidates = 5;
+  // The candidate's neighbours on its odometry segment (this many either side) lend their
+  // points: a view between two keyframes shares more with the pair than with either.
+  int neighbours = 2;
+  // Descriptor matching (nearest / second nearest < match_ratio), PnP RANSAC, refinement.
+  double match_ratio = 0.8;
+  geometry::PnpKernel pnp_kernel = geometry::PnpKernel::kAp3p;
+  double ransac_threshold = 2.0;  // [px]
+  int ransac_iterations = 300;    // no motion prior: inlier ratios can be low
+  // RANSAC's consensus (and the descriptor matches it needs) to seed the guided search; a view
+  // seen from a few decimetres off the keyframe matches only part of its points by descriptor.
+  int min_ransac_inliers = 20;
+  // Guided search: every point of the candidate and its neighbours projected with the refined
+  // pose finds its best key point within this radius (descriptor limit and ratio as above).
+  // A pose from >= 20 inliers is good to a pixel or two; 8 px leaves room for its error.
+  double search_radius = 8.0;  // [px]
+  // Acceptance after the guided search: the tracker's own "tracking ok" level (50 inliers), as
+  // a relocalized frame is tracked from at once...
+  int min_inliers = 50;
+  // ...spread over this many cells of a 4 x 4 grid, so that one textured object repeated
+  // elsewhere (a poster, a sign) cannot place the camera alone. Loop detection asks for 6 and has
+  // the odometry as a second check; without it, 8 cells: half the image.
+  int min_inlier_cells = 8;
+  // Automatic recovery after tracking loss: attempt on every n-th frame while lost. 1: every
+  // frame; an attempt costs a few ms against the tracker's 6-8 ms and the 50 ms of a 20 Hz frame.
+  int attempt_every_n_frames = 1;
+  // Uncertainty of a relocalization edge in the pose graph: as a verified loop's.
+  double translation_sigma = 0.02;  // [m]
+  double rotation_sigma_deg = 0.2;  // [deg]
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;  // throws std::invalid_argument
+};
+
+}  // namespace stereo_fabmap_slam::relocalization

@@ -1,0 +1,269 @@
+#include "stereo_fabmap_slam/relocalization/relocalizer.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "stereo_fabmap_slam/features/descriptor_matching.h"
+#include "stereo_fabmap_slam/features/feature_factory.h"
+#include "stereo_fabmap_slam/features/keypoint_grid.h"
+#include "stereo_fabmap_slam/geometry/image_coverage.h"
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/odometry/pose_refiner.h"
+
+namespace stereo_fabmap_slam::relocalization {
+namespace {
+
+constexpr int kSpreadGrid = 4;   // inlier spread is counted in kSpreadGrid x kSpreadGrid cells
+constexpr int kSearchCell = 16;  // [px] cells of the key point grid for the guided search
+
+// Order of the stages: a failure reports the candidate that got furthest.
+int Progress(RelocalizationStatus status) {
+  switch (status) {
+    case RelocalizationStatus::kEmptyMap:
+    case RelocalizationStatus::kNoCandidate:
+      return 0;
+    case RelocalizationStatus::kTooFewMatches:
+      return 1;
+    case RelocalizationStatus::kRansacFailed:
+      return 2;
+    case RelocalizationStatus::kVerificationFailed:
+      return 3;
+    case RelocalizationStatus::kSuccess:
+      return 4;
+  }
+  return 0;
+}
+
+bool Better(const Relocalization& a, const Relocalization& b) {
+  return Progress(a.status) > Progress(b.status) ||
+         (Progress(a.status) == Progress(b.status) && a.inliers > b.inliers);
+}
+
+}  // namespace
+
+const char* RelocalizationStatusName(RelocalizationStatus status) {
+  switch (status) {
+    case RelocalizationStatus::kSuccess:
+      return "success";
+    case RelocalizationStatus::kEmptyMap:
+      return "empty map";
+    case RelocalizationStatus::kNoCandidate:
+      return "no candidate";
+    case RelocalizationStatus::kTooFewMatches:
+      return "too few matches";
+    case RelocalizationStatus::kRansacFailed:
+      return "RANSAC failed";
+    case RelocalizationStatus::kVerificationFailed:
+      return "verification failed";
+  }
+  return "?";
+}
+
+Relocalizer::Relocalizer(const RelocalizerOptions& options, const geometry::StereoCamera& camera,
+                         int descriptor_norm, double max_descriptor_distance)
+    : options_((options.Validate(), options)),
+      camera_(camera),
+      descriptor_norm_(descriptor_norm),
+      max_descriptor_distance_(max_descriptor_distance) {}
+
+Relocalization Relocalizer::Relocalize(const features::StereoFeatures& frame,
+                                       const std::vector<int>& words,
+                                       const place_recognition::LoopDetector& map,
+                                       const KeyframeFilter& allowed) const {
+  Relocalization best;
+  if (map.database().empty()) {
+    best.status = RelocalizationStatus::kEmptyMap;
+    best.reason = "the map is empty";
+    return best;
+  }
+  if (words.empty()) {
+    best.reason = "the frame has no place words";
+    return best;
+  }
+  const place_recognition::PlaceQuery places =
+      map.Candidates(words, allowed, options_.max_candidates, 0.0);
+  if (places.places_compared == 0) {
+    best.reason = "no keyframe of the map to compare with";
+    return best;
+  }
+  best.reason = "FAB-MAP proposed no keyframe";
+  int verified = 0;
+  for (const place_recognition::PlaceCandidate& candidate : places.candidates) {
+    const map::StoredKeyframe& keyframe = map.database().Get(candidate.keyframe_id);
+    Relocalization attempt = Verify(frame, GatherPoints(map.database(), keyframe));
+    attempt.keyframe_id = candidate.keyframe_id;
+    attempt.probability = candidate.probability;
+    if (verified == 0 || Better(attempt, best)) best = std::move(attempt);
+    ++verified;
+  }
+  best.candidates = verified;
+  return best;
+}
+
+Relocalizer::PointSet Relocalizer::GatherPoints(const map::KeyframeDatabase& database,
+                                                const map::StoredKeyframe& candidate) const {
+  // The candidate, then its neighbours on the same odometry segment, nearest first.
+  std::vector<const map::StoredKeyframe*> keyframes{&candidate};
+  const auto& all = database.keyframes();
+  const auto at = all.find(candidate.keyframe.id);
+  auto before = at, after = at;
+  for (int k = 0; k < options_.neighbours; ++k) {
+    if (before != all.begin() && std::prev(before)->second.segment == candidate.segment) {
+      --before;
+      keyframes.push_back(&before->second);
+    }
+    if (std::next(after) != all.end() && std::next(after)->second.segment == candidate.segment) {
+      ++after;
+      keyframes.push_back(&after->second);
+    }
+  }
+
+  PointSet set;
+  std::vector<std::pair<const cv::Mat*, int>> rows;
+  std::unordered_set<std::int64_t> seen;  // map points already taken from a nearer keyframe
+  const Eigen::Isometry3d T_candidate_world = candidate.keyframe.T_world_camera.inverse();
+  for (const map::StoredKeyframe* stored : keyframes) {
+    const map::Keyframe& keyframe = stored->keyframe;
+    const Eigen::Isometry3d T_candidate_keyframe = T_candidate_world * keyframe.T_world_camera;
+    for (std::size_t i = 0; i < keyframe.features.size(); ++i) {
+      if (!keyframe.features.HasDepth(i)) continue;
+      const std::int64_t id =
+          i < keyframe.map_point_ids.size() ? keyframe.map_point_ids[i] : std::int64_t{-1};
+      if (id >= 0 && !seen.insert(id).second) continue;
+      set.points.push_back(T_candidate_keyframe * keyframe.features.points[i]);
+      rows.emplace_back(&keyframe.features.descriptors, static_cast<int>(i));
+    }
+  }
+  if (!rows.empty()) {
+    const cv::Mat& first = *rows.front().first;
+    set.descriptors.create(static_cast<int>(rows.size()), first.cols, first.type());
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      rows[k].first->row(rows[k].second).copyTo(set.descriptors.row(static_cast<int>(k)));
+    }
+  }
+  return set;
+}
+
+Relocalization Relocalizer::Verify(const features::StereoFeatures& frame,
+                                   const PointSet& set) const {
+  Relocalization result;
+  // 1. Descriptor matches between the frame and the points, with the ratio test.
+  std::vector<geometry::PnpCorrespondence> correspondences;
+  std::vector<odometry::PoseObservation> observations;
+  for (const cv::DMatch& match :
+       features::RatioTestMatches(frame.descriptors, set.descriptors, descriptor_norm_,
+                                  max_descriptor_distance_, options_.match_ratio)) {
+    const std::size_t i = static_cast<std::size_t>(match.queryIdx);
+    const Eigen::Vector3d& point = set.points[static_cast<std::size_t>(match.trainIdx)];
+    const cv::Point2f& pixel = frame.keypoints[i].pt;
+    correspondences.push_back(
+        {point, Eigen::Vector2d(pixel.x, pixel.y), frame.HasDepth(i), frame.points[i]});
+    observations.push_back({point, pixel.x, pixel.y, frame.u_right[i]});
+  }
+  result.matches = static_cast<int>(correspondences.size());
+  if (result.matches < options_.min_ransac_inliers) {
+    result.status = RelocalizationStatus::kTooFewMatches;
+    result.reason = "only " + std::to_string(result.matches) + " descriptor matches";
+    return result;
+  }
+
+  // 2. PnP RANSAC with the configured kernel, then the robust refinement of its consensus.
+  geometry::PnpRansacOptions ransac_options;
+  ransac_options.kernel = options_.pnp_kernel;
+  ransac_options.reprojection_threshold = options_.ransac_threshold;
+  ransac_options.max_iterations = options_.ransac_iterations;
+  const geometry::PnpResult ransac = geometry::SolvePnpRansac(
+      correspondences, camera_, ransac_options, Eigen::Isometry3d::Identity());
+  result.inliers = static_cast<int>(ransac.inliers.size());
+  if (!ransac.success || result.inliers < options_.min_ransac_inliers) {
+    result.status = RelocalizationStatus::kRansacFailed;
+    result.reason = "RANSAC found " + std::to_string(result.inliers) + " inliers of " +
+                    std::to_string(result.matches) + " matches";
+    return result;
+  }
+  std::vector<bool> initial(correspondences.size(), false);
+  for (const int i : ransac.inliers) initial[static_cast<std::size_t>(i)] = true;
+  const odometry::PoseRefinementOptions refinement;
+  const odometry::PoseRefinement refined =
+      odometry::RefinePose(observations, camera_, ransac.T_camera_world, refinement, &initial);
+  result.inliers = refined.inliers;
+  if (refined.inliers < options_.min_ransac_inliers) {
+    result.status = RelocalizationStatus::kVerificationFailed;
+    result.reason = "refinement kept " + std::to_string(refined.inliers) + " inliers";
+    return result;
+  }
+
+  // 3. Guided search: each point, projected with the refined pose, takes its best key point
+  // nearby; each key point keeps its best point.
+  const features::KeypointGrid grid(frame.keypoints, camera_.size, kSearchCell);
+  struct Found {
+    std::size_t point;
+    double distance;
+  };
+  std::unordered_map<int, Found> by_keypoint;
+  for (std::size_t p = 0; p < set.points.size(); ++p) {
+    const Eigen::Vector3d c = refined.T_camera_world * set.points[p];
+    if (c.z() < 0.05) continue;
+    const double u = camera_.fx * c.x() / c.z() + camera_.cx;
+    const double v = camera_.fy * c.y() / c.z() + camera_.cy;
+    if (u < 0 || v < 0 || u >= camera_.size.width || v >= camera_.size.height) continue;
+    double best = std::numeric_limits<double>::max(), second = best;
+    int best_index = -1;
+    grid.ForEachWithin(u, v, options_.search_radius, [&](int i) {
+      const double distance = features::DescriptorDistance(set.descriptors, static_cast<int>(p),
+                                                           frame.descriptors, i, descriptor_norm_);
+      if (distance < best) {
+        second = best;
+        best = distance;
+        best_index = i;
+      } else if (distance < second) {
+        second = distance;
+      }
+    });
+    if (best_index < 0 || best > max_descriptor_distance_ || best > options_.match_ratio * second) {
+      continue;
+    }
+    const auto [it, inserted] = by_keypoint.try_emplace(best_index, Found{p, best});
+    if (!inserted && best < it->second.distance) it->second = Found{p, best};
+  }
+  std::vector<int> keypoints;
+  for (const auto& entry : by_keypoint) keypoints.push_back(entry.first);
+  std::sort(keypoints.begin(), keypoints.end());  // deterministic order for the refinement
+  std::vector<odometry::PoseObservation> guided;
+  for (const int i : keypoints) {
+    const cv::Point2f& pixel = frame.keypoints[static_cast<std::size_t>(i)].pt;
+    guided.push_back({set.points[by_keypoint.at(i).point], pixel.x, pixel.y,
+                      frame.u_right[static_cast<std::size_t>(i)]});
+  }
+  const odometry::PoseRefinement final_pose =
+      odometry::RefinePose(guided, camera_, refined.T_camera_world, refinement);
+
+  // 4. Acceptance: enough inliers, spread over the image.
+  result.inliers = final_pose.inliers;
+  std::vector<Eigen::Vector2d> inlier_pixels;
+  for (std::size_t k = 0; k < guided.size(); ++k) {
+    if (final_pose.inlier[k]) inlier_pixels.emplace_back(guided[k].u, guided[k].v);
+  }
+  result.inlier_cells = geometry::OccupiedCells(inlier_pixels, camera_.size, kSpreadGrid);
+  result.T_keyframe_camera = final_pose.T_camera_world.inverse();
+  if (result.inliers < options_.min_inliers) {
+    result.status = RelocalizationStatus::kVerificationFailed;
+    result.reason = std::to_string(result.inliers) + " inliers after the guided search (" +
+                    std::to_string(options_.min_inliers) + " needed)";
+    return result;
+  }
+  if (result.inlier_cells < options_.min_inlier_cells) {
+    result.status = RelocalizationStatus::kVerificationFailed;
+    result.reason = "inliers cover only " + std::to_string(result.inlier_cells) + " of " +
+                    std::to_string(kSpreadGrid * kSpreadGrid) + " image cells";
+    return result;
+  }
+  result.status = RelocalizationStatus::kSuccess;
+  result.reason = "relocalized";
+  return result;
+}
+
+}  // namespace stereo_fabmap_slam::relocalization
