@@ -77,8 +77,12 @@ void PoseGraph::UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_o
   if (component.loops == 0) keyframe.SetMapPose(component.T_map_odom * T_odom_camera);
 }
 
-void PoseGraph::AddLoop(const map::LoopEdge& edge) {
+void PoseGraph::AddLoop(const map::LoopEdge& edge, PoseGraphEdgeType type) {
+  if (type == PoseGraphEdgeType::kOdometry) {
+    throw std::invalid_argument("PoseGraph::AddLoop: odometry edges come from AddKeyframe");
+  }
   Loop loop;
+  loop.type = type;
   loop.match = IndexOf(edge.match_id);
   loop.query = IndexOf(edge.query_id);
   if (loop.match == loop.query) {
@@ -223,7 +227,7 @@ std::vector<PoseGraphEdge> PoseGraph::Edges() const {
   }
   for (const Loop& loop : loops_) {
     edges.push_back({keyframes_[loop.match].id, keyframes_[loop.query].id, loop.T_match_query,
-                     loop.information, PoseGraphEdgeType::kLoop});
+                     loop.information, loop.type});
   }
   return edges;
 }
@@ -235,6 +239,10 @@ std::size_t PoseGraph::IndexOf(std::int64_t id) const {
     throw std::invalid_argument("PoseGraph: unknown keyframe id " + std::to_string(id));
   }
   return static_cast<std::size_t>(it - keyframes_.begin());
+}
+
+bool PoseGraph::Connected(std::int64_t a, std::int64_t b) const {
+  return ComponentOf(keyframes_[IndexOf(a)].segment) == ComponentOf(keyframes_[IndexOf(b)].segment);
 }
 
 int PoseGraph::ComponentOf(int segment) const {

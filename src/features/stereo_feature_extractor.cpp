@@ -44,8 +44,21 @@ StereoFeatureExtractor::Detected StereoFeatureExtractor::Detect(const cv::Mat& l
     detected.left = left_detector_.Detect(left);
     detected.right = right_detector_.Detect(right);
   }
+  return Select(std::move(detected), left.size());
+}
+
+StereoFeatureExtractor::Detected StereoFeatureExtractor::DetectWithoutAdapting(
+    const cv::Mat& left, const cv::Mat& right) const {
+  Detected detected;
+  detected.left = left_detector_.DetectRows(left, 0, left.rows);
+  detected.right = right_detector_.DetectRows(right, 0, right.rows);
+  return Select(std::move(detected), left.size());
+}
+
+StereoFeatureExtractor::Detected StereoFeatureExtractor::Select(Detected detected,
+                                                                const cv::Size& size) const {
   detected.left = options_.anms ? SelectWithAnms(std::move(detected.left), options_.max_features,
-                                                 left.size(), options_.anms_tolerance)
+                                                 size, options_.anms_tolerance)
                                 : SelectStrongest(std::move(detected.left), options_.max_features);
   detected.right = SelectStrongest(std::move(detected.right), options_.max_right_features);
   return detected;

@@ -26,9 +26,7 @@ place_recognition::LoopDetector LoopClosing::LoadDetector(
       std::move(fabmap), camera, descriptor_norm, max_descriptor_distance);
 }
 
-LoopClosingOutput LoopClosing::Process(const map::Keyframe& keyframe,
-                                       const map::KeyframeUpdate& update) {
-  LoopClosingOutput output;
+void LoopClosing::AddKeyframe(const map::Keyframe& keyframe, const map::KeyframeUpdate& update) {
   map::Keyframe adjusted = keyframe;
   for (const auto& [id, pose] : update.keyframe_poses) {
     if (id == keyframe.id) {
@@ -39,9 +37,13 @@ LoopClosingOutput LoopClosing::Process(const map::Keyframe& keyframe,
     }
   }
   pose_graph_.AddKeyframe(adjusted.id, adjusted.T_world_camera, adjusted.starts_new_map);
+  detector_.Add(std::move(adjusted));
+}
 
+LoopClosingOutput LoopClosing::DetectLoop(std::int64_t keyframe_id) {
+  LoopClosingOutput output;
   double start = clock_();
-  output.detection = detector_.Process(std::move(adjusted));
+  output.detection = detector_.DetectStored(keyframe_id);
   output.detection_ms = clock_() - start;
   if (output.detection.loop) {
     start = clock_();
@@ -51,6 +53,13 @@ LoopClosingOutput LoopClosing::Process(const map::Keyframe& keyframe,
     output.pose_graph_ms = clock_() - start;
   }
   return output;
+}
+
+double LoopClosing::AddRelocalization(const map::LoopEdge& edge) {
+  const double start = clock_();
+  pose_graph_.AddLoop(edge, backend::PoseGraphEdgeType::kRelocalization);
+  pose_graph_.Optimize();
+  return clock_() - start;
 }
 
 }  // namespace stereo_fabmap_slam::pipeline

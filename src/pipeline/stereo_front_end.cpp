@@ -34,13 +34,35 @@ FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw
   lap(&timing.description_ms);
   features::StereoFeatures features = extractor_.Match(left, right, std::move(described));
   lap(&timing.stereo_ms);
+  output.features = features;
   output.tracking = tracker_.Track(timestamp, std::move(features));
   lap(&timing.tracking_ms);
+  last_left_ = left;
   if (output.tracking.keyframe && place_describer_) {
     output.tracking.keyframe->place_descriptors = place_describer_->Describe(left);
     lap(&timing.place_description_ms);
   }
   return output;
+}
+
+cv::Mat StereoFrontEnd::DescribeLastFrame() const {
+  if (!place_describer_ || last_left_.empty()) return cv::Mat();
+  return place_describer_->DescribeWithoutAdapting(last_left_);
+}
+
+features::StereoFeatures StereoFrontEnd::Extract(const cv::Mat& left_raw, const cv::Mat& right_raw,
+                                                 cv::Mat* place_descriptors) const {
+  cv::Mat left, right;
+  rectifier_.Rectify(left_raw, right_raw, &left, &right);
+  features::StereoFeatureExtractor::Detected detected =
+      extractor_.DetectWithoutAdapting(left, right);
+  features::StereoFeatureExtractor::Described described =
+      extractor_.Describe(left, right, std::move(detected));
+  if (place_descriptors != nullptr) {
+    *place_descriptors =
+        place_describer_ ? place_describer_->DescribeWithoutAdapting(left) : cv::Mat();
+  }
+  return extractor_.Match(left, right, std::move(described));
 }
 
 }  // namespace stereo_fabmap_slam::pipeline

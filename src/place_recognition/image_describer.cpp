@@ -10,7 +10,14 @@ ImageDescriber::ImageDescriber(const features::FeatureOptions& options)
       descriptor_(features::CreateDescriptor(options)) {}
 
 cv::Mat ImageDescriber::Describe(const cv::Mat& image) {
-  std::vector<cv::KeyPoint> keypoints = detector_.Detect(image);
+  return Compute(image, detector_.Detect(image));
+}
+
+cv::Mat ImageDescriber::DescribeWithoutAdapting(const cv::Mat& image) const {
+  return Compute(image, detector_.DetectRows(image, 0, image.rows));
+}
+
+cv::Mat ImageDescriber::Compute(const cv::Mat& image, std::vector<cv::KeyPoint> keypoints) const {
   keypoints = options_.anms
                   ? features::SelectWithAnms(std::move(keypoints), options_.max_features,
                                              image.size(), options_.anms_tolerance)

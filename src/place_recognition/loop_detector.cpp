@@ -9,6 +9,7 @@
 #include "stereo_fabmap_slam/features/descriptor_matching.h"
 #include "stereo_fabmap_slam/geometry/image_coverage.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/odometry/pose_refiner.h"
 
 namespace stereo_fabmap_slam::place_recognition {
@@ -40,36 +41,44 @@ LoopDetector::LoopDetector(const LoopDetectorOptions& options, Vocabulary vocabu
 }
 
 std::vector<int> LoopDetector::Words(const map::Keyframe& keyframe) const {
-  const cv::Mat& descriptors = keyframe.place_descriptors;
+  try {
+    return Words(keyframe.place_descriptors);
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.id) + ": " + error.what());
+  }
+}
+
+std::vector<int> LoopDetector::Words(const cv::Mat& descriptors) const {
   if (descriptors.empty()) return {};
   const bool binary = descriptors.type() == CV_8U;
   const int bytes = static_cast<int>(descriptors.cols * descriptors.elemSize());
   if ((descriptors.type() != CV_8U && descriptors.type() != CV_32F) ||
       binary != vocabulary_.binary() || bytes != vocabulary_.descriptor_bytes()) {
     throw std::invalid_argument(
-        "keyframe " + std::to_string(keyframe.id) + " has " + (binary ? "binary" : "float") +
-        " place descriptors of " + std::to_string(bytes) + " bytes, the vocabulary " +
-        (vocabulary_.binary() ? "binary" : "float") + " ones of " +
+        std::string("place descriptors are ") + (binary ? "binary" : "float") + " of " +
+        std::to_string(bytes) + " bytes, the vocabulary's " +
+        (vocabulary_.binary() ? "binary" : "float") + " of " +
         std::to_string(vocabulary_.descriptor_bytes()) +
         " bytes: train a vocabulary with the odometry's descriptor (train_fabmap)");
   }
   return vocabulary_.WordSet(descriptors);
 }
 
-LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
+const map::StoredKeyframe& LoopDetector::Add(map::Keyframe keyframe) {
   std::vector<int> words = Words(keyframe);
-  if (!add_to_map) {
-    // Compared without being stored: it has no place on the odometry path to check against.
-    map::StoredKeyframe query;
-    query.keyframe = std::move(keyframe);
-    query.words = std::move(words);
-    query.segment = -1;  // unknown: no odometry prediction to check against
-    return Detect(query);
-  }
   const map::StoredKeyframe& stored = database_.Add(std::move(keyframe), std::move(words));
-  LoopDetection detection = Detect(stored);
   AddPlace(stored);
-  return detection;
+  return stored;
+}
+
+LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
+  if (add_to_map) return Detect(Add(std::move(keyframe)));
+  // Compared without being stored: it has no place on the odometry path to check against.
+  map::StoredKeyframe query;
+  query.words = Words(keyframe);
+  query.keyframe = std::move(keyframe);
+  query.segment = -1;  // unknown: no odometry prediction to check against
+  return Detect(query);
 }
 
 LoopDetection LoopDetector::DetectStored(std::int64_t keyframe_id) {
@@ -117,7 +126,8 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
   // Keyframes within min_age of the query (either way: a stored query sees newer ones too) are
   // no places to return to; the posterior is taken over the others only.
   const auto old_enough = [&](const map::StoredKeyframe& place) {
-    return std::abs(place.keyframe.timestamp - query_time) >= options_.min_age;
+    return place.keyframe.id != query.keyframe.id &&
+           std::abs(place.keyframe.timestamp - query_time) >= options_.min_age;
   };
   const PlaceQuery places =
       Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability);
@@ -243,11 +253,8 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   result.edge.match_id = candidate.keyframe.id;
   result.edge.T_match_query = T_candidate_query;
   result.edge.inliers = refined.inliers;
-  result.edge.information.setZero();
-  const double t = 1.0 / (options_.translation_sigma * options_.translation_sigma);
-  const double r_sigma = options_.rotation_sigma_deg * kDegreesToRadians;
-  const double r = 1.0 / (r_sigma * r_sigma);
-  result.edge.information.diagonal() << t, t, t, r, r, r;
+  result.edge.information =
+      geometry::DiagonalPoseInformation(options_.translation_sigma, options_.rotation_sigma_deg);
   return result;
 }
 

@@ -98,6 +98,9 @@ Relocalization Relocalizer::Relocalize(const features::StereoFeatures& frame,
     attempt.probability = candidate.probability;
     if (verified == 0 || Better(attempt, best)) best = std::move(attempt);
     ++verified;
+    // The first verified candidate in FAB-MAP's order wins: verification is strict enough to
+    // trust it, and stopping keeps the typical attempt to one candidate's cost.
+    if (best.success()) break;
   }
   best.candidates = verified;
   return best;

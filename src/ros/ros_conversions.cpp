@@ -254,9 +254,17 @@ stereo_fabmap_slam::MapGraph ToMapGraphMessage(const backend::PoseGraph& graph) 
     stereo_fabmap_slam::MapGraphEdge edge_message;
     edge_message.from_id = static_cast<std::uint64_t>(edge.from);
     edge_message.to_id = static_cast<std::uint64_t>(edge.to);
-    edge_message.type = edge.type == backend::PoseGraphEdgeType::kLoop
-                            ? stereo_fabmap_slam::MapGraphEdge::LOOP
-                            : stereo_fabmap_slam::MapGraphEdge::ODOMETRY;
+    switch (edge.type) {
+      case backend::PoseGraphEdgeType::kOdometry:
+        edge_message.type = stereo_fabmap_slam::MapGraphEdge::ODOMETRY;
+        break;
+      case backend::PoseGraphEdgeType::kLoop:
+        edge_message.type = stereo_fabmap_slam::MapGraphEdge::LOOP;
+        break;
+      case backend::PoseGraphEdgeType::kRelocalization:
+        edge_message.type = stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION;
+        break;
+    }
     edge_message.T_from_to = ToPoseMessage(edge.T_from_to);
     message.edges.push_back(edge_message);
   }

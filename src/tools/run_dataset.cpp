@@ -106,15 +106,28 @@ void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::st
   std::fprintf(file,
                "frame,timestamp,state,keyframe,rectification_ms,detection_ms,description_ms,"
                "stereo_ms,tracking_ms,bundle_adjustment_ms,place_description_ms,"
-               "loop_detection_ms,pose_graph_ms,inliers,note\n");
+               "loop_detection_ms,pose_graph_ms,relocalization_ms,inliers,on_map,relocalization,"
+               "note\n");
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const pipeline::FrameRecord& f = frames[i];
     const pipeline::FrameTiming& t = f.timing;
-    std::fprintf(file, "%zu,%.9f,%s,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,\"%s\"\n", i,
-                 f.timestamp, odometry::TrackingStateName(f.state), f.is_keyframe ? 1 : 0,
+    // The relocalization attempt of the frame, if any: its outcome, keyframe and inliers.
+    std::string relocalization;
+    if (f.relocalization) {
+      const relocalization::Relocalization& r = f.relocalization->result;
+      relocalization = std::string(relocalization::RelocalizationStatusName(r.status)) +
+                       (r.keyframe_id >= 0 ? " against keyframe " + std::to_string(r.keyframe_id)
+                                           : std::string()) +
+                       ": " + r.reason;
+    }
+    std::fprintf(file,
+                 "%zu,%.9f,%s,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,\"%s\","
+                 "\"%s\"\n",
+                 i, f.timestamp, odometry::TrackingStateName(f.state), f.is_keyframe ? 1 : 0,
                  t.rectification_ms, t.detection_ms, t.description_ms, t.stereo_ms, t.tracking_ms,
                  t.bundle_adjustment_ms, t.place_description_ms, t.loop_detection_ms,
-                 t.pose_graph_ms, f.inliers, f.note.c_str());
+                 t.pose_graph_ms, t.relocalization_ms, f.inliers, f.on_map ? 1 : 0,
+                 relocalization.c_str(), f.note.c_str());
   }
   std::fclose(file);
 }
@@ -173,7 +186,7 @@ int main(int argc, char** argv) {
       slam.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
                                  *place_options, options.loop_detection, rectifier.camera(),
                                  slam.descriptor_norm(), slam.max_match_distance()),
-                             options.pose_graph);
+                             options.pose_graph, options.relocalization);
     }
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
@@ -240,6 +253,22 @@ int main(int argc, char** argv) {
                   "\"loop_detection_ms_median\": %.3f, \"pose_graph_ms_max\": %.3f",
                   loop_closing ? "true" : "false", loops.accepted, loops.rejected,
                   Summarise(loops.detection_ms).median, loops.pose_graph_ms_max);
+    json += buffer;
+    int relocalizations = 0, attempts = 0, frames_lost = 0;
+    std::vector<double> relocalization_ms;
+    for (const pipeline::FrameRecord& f : slam.frames()) {
+      frames_lost += f.on_map ? 0 : 1;
+      if (!f.relocalization) continue;
+      ++attempts;
+      relocalizations += f.relocalization->result.success() ? 1 : 0;
+      relocalization_ms.push_back(f.relocalization->ms);
+    }
+    std::snprintf(buffer, sizeof(buffer),
+                  ", \"relocalizations\": %d, \"relocalization_attempts\": %d, "
+                  "\"frames_lost\": %d, \"relocalization_ms_median\": %.3f, "
+                  "\"trajectory_frames\": %zu",
+                  relocalizations, attempts, frames_lost, Summarise(relocalization_ms).median,
+                  trajectory.size());
     json += buffer;
     if (sequence.has_ground_truth()) {
       // Ground truth is the body frame: move it to the rectified left camera we estimate.

@@ -7,6 +7,7 @@
 #include "stereo_fabmap_slam/camera/camera_options.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/relocalization/relocalization_options.h"
 
 namespace stereo_fabmap_slam::tools {
 
@@ -18,6 +19,7 @@ struct SlamConfiguration {
   backend::BundleAdjustmentOptions bundle_adjustment;
   place_recognition::LoopDetectorOptions loop_detection;
   backend::PoseGraphOptions pose_graph;
+  relocalization::RelocalizerOptions relocalization;
 
   template <typename Visit>
   void ForEachModule(Visit visit) {
@@ -26,6 +28,7 @@ struct SlamConfiguration {
     visit(bundle_adjustment);
     visit(loop_detection);
     visit(pose_graph);
+    visit(relocalization);
   }
 
   // Reads and validates every section; unknown sections and keys, and bad values, throw

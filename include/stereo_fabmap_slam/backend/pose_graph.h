@@ -13,7 +13,9 @@
 
 namespace stereo_fabmap_slam::backend {
 
-enum class PoseGraphEdgeType { kOdometry, kLoop };
+// Odometry between consecutive keyframes of a segment; a verified loop between two keyframes;
+// a relocalization: a frame of a segment cut off by tracking loss found in the map again.
+enum class PoseGraphEdgeType { kOdometry, kLoop, kRelocalization };
 
 struct PoseGraphEdge {
   std::int64_t from = -1;
@@ -58,11 +60,15 @@ class PoseGraph {
   // moves the younger one rigidly onto the older one through this edge at once, so that the edge
   // starts the optimisation satisfied instead of hundreds of sigmas off, where its robust loss
   // would ignore it.
-  void AddLoop(const map::LoopEdge& loop);
+  // `type`: kLoop or kRelocalization (the same constraint; kept apart for display and counts).
+  void AddLoop(const map::LoopEdge& loop, PoseGraphEdgeType type = PoseGraphEdgeType::kLoop);
   // Optimises the components that have loops, from the current map poses.
   PoseGraphSummary Optimize();
 
   bool Contains(std::int64_t id) const;
+  // Whether loop or relocalization edges join the two keyframes' segments (one map); throws
+  // std::invalid_argument for unknown ids.
+  bool Connected(std::int64_t a, std::int64_t b) const;
   Eigen::Isometry3d MapPose(std::int64_t id) const;  // T_map_camera; throws for unknown ids
   std::map<std::int64_t, Eigen::Isometry3d> MapPoses() const;
   // T_map_odom: the correction of the newest keyframe, map pose * odom pose^-1, what a ROS
@@ -90,6 +96,7 @@ class PoseGraph {
     Eigen::Isometry3d T_match_query;
     Eigen::Matrix<double, 6, 6> information;
     Eigen::Matrix<double, 6, 6> sqrt_information;
+    PoseGraphEdgeType type;
   };
   struct Segment {
     std::size_t first;  // index of its first keyframe

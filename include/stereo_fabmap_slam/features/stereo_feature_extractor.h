@@ -34,6 +34,9 @@ class StereoFeatureExtractor {
                          const geometry::StereoCamera& camera);
 
   Detected Detect(const cv::Mat& left, const cv::Mat& right);
+  // The same corners for a pair outside the stream (e.g. a view checked against the map): the
+  // thresholds stay as they are, so the stream's detection is not disturbed. One thread.
+  Detected DetectWithoutAdapting(const cv::Mat& left, const cv::Mat& right) const;
   Described Describe(const cv::Mat& left, const cv::Mat& right, Detected detected) const;
   StereoFeatures Match(const cv::Mat& left, const cv::Mat& right, Described described) const;
   StereoFeatures Extract(const cv::Mat& left, const cv::Mat& right);
@@ -43,6 +46,8 @@ class StereoFeatureExtractor {
   const geometry::StereoCamera& camera() const { return camera_; }
 
  private:
+  Detected Select(Detected detected, const cv::Size& size) const;  // ANMS or strongest
+
   FeatureOptions options_;
   geometry::StereoCamera camera_;
   AdaptiveDetector left_detector_, right_detector_;

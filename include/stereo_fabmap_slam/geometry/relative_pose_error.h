@@ -1,10 +1,24 @@
 #pragma once
 
+#include <cmath>
+
 #include <ceres/autodiff_cost_function.h>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 namespace stereo_fabmap_slam::geometry {
+
+// Information (inverse covariance) of a relative pose with independent errors of
+// `translation_sigma` [m] per axis and `rotation_sigma_deg` per axis, in RelativePoseError's
+// order (translation, rotation).
+inline Eigen::Matrix<double, 6, 6> DiagonalPoseInformation(double translation_sigma,
+                                                           double rotation_sigma_deg) {
+  const double rotation_sigma = rotation_sigma_deg * (M_PI / 180.0);
+  Eigen::Matrix<double, 6, 1> diagonal;
+  diagonal.head<3>().setConstant(1.0 / (translation_sigma * translation_sigma));
+  diagonal.tail<3>().setConstant(1.0 / (rotation_sigma * rotation_sigma));
+  return diagonal.asDiagonal();
+}
 
 // Error of a measured relative pose T_a_b between two poses T_world_a and T_world_b, for a pose
 // graph. Parameter blocks: the rotation of T_world_a as an Eigen quaternion (x, y, z, w), its

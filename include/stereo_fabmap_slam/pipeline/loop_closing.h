@@ -34,11 +34,24 @@ class LoopClosing {
       const place_recognition::LoopDetectorOptions& detector_options,
       const geometry::StereoCamera& camera, int descriptor_norm, double max_descriptor_distance);
 
-  // `update` is what the bundle adjustment changed when it added `keyframe` (odom frame).
-  LoopClosingOutput Process(const map::Keyframe& keyframe, const map::KeyframeUpdate& update);
+  // `update` is what the bundle adjustment changed when it added `keyframe` (odom frame): the
+  // keyframe joins the map (pose graph, keyframe database, FAB-MAP), then it is compared with
+  // the map for a loop.
+  LoopClosingOutput Process(const map::Keyframe& keyframe, const map::KeyframeUpdate& update) {
+    AddKeyframe(keyframe, update);
+    return DetectLoop(keyframe.id);
+  }
+  // The two halves of Process, for a caller that relocalizes in between.
+  void AddKeyframe(const map::Keyframe& keyframe, const map::KeyframeUpdate& update);
+  LoopClosingOutput DetectLoop(std::int64_t keyframe_id);
+  // A frame whose reference keyframe is `keyframe_id` was relocalized against `edge.match_id`:
+  // the edge (T_match_query = match camera to that keyframe) joins the keyframe's segment to the
+  // match's, and the pose graph is optimised. Returns the optimisation's milliseconds.
+  double AddRelocalization(const map::LoopEdge& edge);
 
   const backend::PoseGraph& pose_graph() const { return pose_graph_; }
   const place_recognition::LoopDetector& detector() const { return detector_; }
+  bool empty() const { return pose_graph_.size() == 0; }
 
  private:
   place_recognition::LoopDetector detector_;

@@ -39,7 +39,7 @@ struct FrontEndOptions {
 struct FrameTiming {
   double rectification_ms = 0, detection_ms = 0, description_ms = 0, stereo_ms = 0, tracking_ms = 0,
          place_description_ms = 0, bundle_adjustment_ms = 0, loop_detection_ms = 0,
-         pose_graph_ms = 0;
+         pose_graph_ms = 0, relocalization_ms = 0;
   // Detection to refined pose: what a frame costs before the next one can be tracked.
   double TrackingTotal() const { return detection_ms + description_ms + stereo_ms + tracking_ms; }
 };
@@ -47,6 +47,8 @@ struct FrameTiming {
 struct FrontEndOutput {
   odometry::TrackingResult tracking;
   FrameTiming timing;
+  // The frame's stereo features (a copy of what the tracker used), for relocalization.
+  features::StereoFeatures features;
 };
 
 // Rectify, extract stereo features, track: everything of a frame up to its pose and keyframe
@@ -61,6 +63,13 @@ class StereoFrontEnd {
 
   // Raw (unrectified) mono8 images of the calibrated size; throws std::invalid_argument otherwise.
   FrontEndOutput Process(double timestamp, const cv::Mat& left_raw, const cv::Mat& right_raw);
+  // Place descriptors of the last processed frame's rectified left image (empty without place
+  // features): computed on demand, as only keyframes and relocalization attempts need them.
+  cv::Mat DescribeLastFrame() const;
+  // The stereo features of a stereo pair, without tracking it (e.g. to check a view against the
+  // map); `place_descriptors` receives its place descriptors (empty without place features).
+  features::StereoFeatures Extract(const cv::Mat& left_raw, const cv::Mat& right_raw,
+                                   cv::Mat* place_descriptors) const;
   void ApplyUpdate(const map::KeyframeUpdate& update) { tracker_.ApplyUpdate(update); }
   void Reset() { tracker_.Reset(); }
 
@@ -74,6 +83,7 @@ class StereoFrontEnd {
   features::StereoFeatureExtractor extractor_;
   odometry::Tracker tracker_;
   std::unique_ptr<place_recognition::ImageDescriber> place_describer_;  // null: no places
+  cv::Mat last_left_;                                                   // rectified
 };
 
 }  // namespace stereo_fabmap_slam::pipeline

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <vector>
+
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/features/adaptive_detector.h"
@@ -15,8 +17,12 @@ class ImageDescriber {
   explicit ImageDescriber(const features::FeatureOptions& options);
   // Descriptors of a mono8 image, one per row (CV_8U binary or CV_32F).
   cv::Mat Describe(const cv::Mat& image);
+  // The same for an image outside the stream: the detector's threshold does not adapt.
+  cv::Mat DescribeWithoutAdapting(const cv::Mat& image) const;
 
  private:
+  cv::Mat Compute(const cv::Mat& image, std::vector<cv::KeyPoint> keypoints) const;
+
   features::FeatureOptions options_;
   features::AdaptiveDetector detector_;
   features::DescriptorKind descriptor_;

@@ -64,7 +64,11 @@ class LoopDetector {
   // The keyframe's place words. Throws std::invalid_argument when its place descriptors are not
   // of the vocabulary's type and size (a keyframe from another configuration).
   std::vector<int> Words(const map::Keyframe& keyframe) const;
+  // The same for any view's place descriptors.
+  std::vector<int> Words(const cv::Mat& place_descriptors) const;
 
+  // Adds a keyframe to the map (the database, and FAB-MAP as a place); returns it as stored.
+  const map::StoredKeyframe& Add(map::Keyframe keyframe);
   // Looks for a loop of a new keyframe, then (if add_to_map) adds it to the map.
   LoopDetection Process(map::Keyframe keyframe, bool add_to_map = true);
   // The same query for a keyframe already in the map (std::out_of_range for an unknown id).

@@ -46,7 +46,8 @@ struct Relocalization {
 // those `allowed` (several, not only the best), then for each: descriptor matches to its and its
 // segment neighbours' stereo points, PnP RANSAC, robust refinement, a guided search by projection
 // for the points the descriptor matching missed, refinement again, and acceptance on an inlier
-// count and their spread over the image. The candidate with the most inliers wins.
+// count and their spread over the image. The first candidate (in FAB-MAP's order) that passes
+// wins; a failure reports the candidate that got furthest.
 // Stateless between calls; no clock.
 class Relocalizer {
  public:
