@@ -241,6 +241,10 @@ std::size_t PoseGraph::IndexOf(std::int64_t id) const {
   return static_cast<std::size_t>(it - keyframes_.begin());
 }
 
+void PoseGraph::RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera) {
+  keyframes_[IndexOf(id)].SetMapPose(T_map_camera);
+}
+
 bool PoseGraph::Connected(std::int64_t a, std::int64_t b) const {
   return ComponentOf(keyframes_[IndexOf(a)].segment) == ComponentOf(keyframes_[IndexOf(b)].segment);
 }

@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
@@ -126,6 +127,29 @@ void StereoSlam::Localize(const FrontEndOutput& output, FrameRecord* record) {
   }
   record->on_map = localized_;
   if (localized_) record->T_map_camera = T_map_odom_ * result.T_world_camera;
+}
+
+void StereoSlam::SaveMap(const std::string& path) const {
+  if (!loop_closing_) throw std::logic_error("StereoSlam::SaveMap: loop closing is off");
+  map::SaveMapFile(path, loop_closing_->Save(front_end_.camera()));
+}
+
+void StereoSlam::LoadMap(const std::string& path) {
+  if (!loop_closing_) throw std::logic_error("StereoSlam::LoadMap: loop closing is off");
+  const map::SavedMap saved = map::LoadMapFile(path);
+  loop_closing_->Load(saved, front_end_.camera());
+  std::int64_t next_keyframe = 0, next_point = 0;
+  for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+    keyframe_times_[keyframe.keyframe.id] = keyframe.keyframe.timestamp;
+    next_keyframe = std::max(next_keyframe, keyframe.keyframe.id + 1);
+    for (const std::int64_t point : keyframe.keyframe.map_point_ids) {
+      next_point = std::max(next_point, point + 1);
+    }
+  }
+  front_end_.SkipIdsBelow(next_keyframe, next_point);
+  anchor_ = saved.keyframes.empty() ? -1 : saved.keyframes.front().keyframe.id;
+  localized_ = false;
+  frames_off_map_ = 0;
 }
 
 RelocalizationOutput StereoSlam::Relocalize(const cv::Mat& left_raw,

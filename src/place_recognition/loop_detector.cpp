@@ -11,6 +11,7 @@
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/odometry/pose_refiner.h"
+#include "stereo_fabmap_slam/place_recognition/place_database.h"
 
 namespace stereo_fabmap_slam::place_recognition {
 namespace {
@@ -32,7 +33,8 @@ LoopDetector::LoopDetector(const LoopDetectorOptions& options, Vocabulary vocabu
       fabmap_(std::move(fabmap)),
       camera_(camera),
       descriptor_norm_(descriptor_norm),
-      max_descriptor_distance_(max_descriptor_distance) {
+      max_descriptor_distance_(max_descriptor_distance),
+      vocabulary_fingerprint_(vocabulary_.Fingerprint()) {
   if (fabmap_.model().size() != vocabulary_.size()) {
     throw std::invalid_argument("the Chow-Liu tree has " + std::to_string(fabmap_.model().size()) +
                                 " words, the vocabulary " + std::to_string(vocabulary_.size()) +
@@ -66,9 +68,26 @@ std::vector<int> LoopDetector::Words(const cv::Mat& descriptors) const {
 
 const map::StoredKeyframe& LoopDetector::Add(map::Keyframe keyframe) {
   std::vector<int> words = Words(keyframe);
+  return Add(std::move(keyframe), std::move(words));
+}
+
+const map::StoredKeyframe& LoopDetector::Add(map::Keyframe keyframe, std::vector<int> words) {
+  for (const int word : words) {
+    if (word < 0 || word >= vocabulary_.size()) {
+      throw std::invalid_argument("keyframe " + std::to_string(keyframe.id) + " has word " +
+                                  std::to_string(word) + " outside the vocabulary");
+    }
+  }
   const map::StoredKeyframe& stored = database_.Add(std::move(keyframe), std::move(words));
   AddPlace(stored);
   return stored;
+}
+
+LoopDetector LoopDetector::WithoutKeyframes() const {
+  FabMap fabmap = fabmap_;
+  fabmap.SetPlaces(PlaceDatabase(vocabulary_.size()));
+  return LoopDetector(options_, vocabulary_, std::move(fabmap), camera_, descriptor_norm_,
+                      max_descriptor_distance_);
 }
 
 LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {

@@ -205,6 +205,15 @@ std::vector<int> Vocabulary::WordSet(const cv::Mat& descriptors) const {
   return words;
 }
 
+std::uint64_t Vocabulary::Fingerprint() const {
+  const cv::Mat continuous = centres_.isContinuous() ? centres_ : centres_.clone();
+  std::vector<std::uint8_t> bytes(continuous.data,
+                                  continuous.data + continuous.total() * continuous.elemSize());
+  const auto* nodes = reinterpret_cast<const std::uint8_t*>(nodes_.data());
+  bytes.insert(bytes.end(), nodes, nodes + nodes_.size() * sizeof(Node));
+  return io::Fnv1a64(bytes.data(), bytes.size()) ^ static_cast<std::uint64_t>(word_count_);
+}
+
 void Vocabulary::Save(const std::string& path) const {
   io::BinaryWriter writer;
   writer.Put<std::int32_t>(centres_.type());

@@ -26,6 +26,7 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 
 constexpr char kUsage[] =
     "usage: run_dataset ASL_DIR [--config FILE] [--fabmap-config FILE] [--no-loop-closing]\n"
+    "                   [--load-map FILE] [--mode mapping|localization] [--save-map FILE]\n"
     "                   [--output DIR] [--quiet]\n"
     "Runs the stereo SLAM on an EuRoC sequence and writes to DIR (default output/<name>):\n"
     "  trajectory.txt  TUM, rectified left camera in the map frame (after loop closing), every "
@@ -35,6 +36,9 @@ constexpr char kUsage[] =
     "  loops.csv       every verified loop candidate, accepted or not, with the reason\n"
     "  timing.csv      milliseconds per frame and stage\n"
     "  summary.json    counts, times, and ATE against ground truth when the sequence has it\n"
+    "--load-map starts from a map saved by --save-map (same vocabulary and camera); with\n"
+    "--mode localization it is used without being extended: the camera is relocalized in it at\n"
+    "start, after every loss and at each keyframe, and trajectory.txt is in the map's frame.\n"
     "Default configs: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml, " STEREO_FABMAP_SLAM_CONFIG_DIR
     "/fabmap.yaml\n";
 
@@ -137,8 +141,10 @@ void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::st
 int main(int argc, char** argv) {
   std::optional<tools::CommandLine> args;
   try {
-    args.emplace(argc, argv, std::set<std::string>{"config", "fabmap-config", "output"},
-                 std::set<std::string>{"quiet", "help", "no-loop-closing"});
+    args.emplace(
+        argc, argv,
+        std::set<std::string>{"config", "fabmap-config", "output", "load-map", "save-map", "mode"},
+        std::set<std::string>{"quiet", "help", "no-loop-closing"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -159,6 +165,26 @@ int main(int argc, char** argv) {
 
     tools::SlamConfiguration options = tools::SlamConfiguration::Load(config);
     const bool loop_closing = !args->Flag("no-loop-closing");
+    const std::optional<std::string> load_map = args->Value("load-map");
+    const std::optional<std::string> save_map = args->Value("save-map");
+    pipeline::SlamMode mode = pipeline::SlamMode::kMapping;
+    if (const std::optional<std::string> name = args->Value("mode")) {
+      bool known = false;
+      for (const auto& entry : pipeline::kSlamModeNames) {
+        if (*name == entry.name) {
+          mode = entry.value;
+          known = true;
+        }
+      }
+      if (!known) throw std::invalid_argument("--mode is mapping or localization");
+    }
+    if (!loop_closing && (load_map || save_map || mode == pipeline::SlamMode::kLocalization)) {
+      throw std::invalid_argument(
+          "maps and localization need loop closing's keyframe map: drop --no-loop-closing");
+    }
+    if (mode == pipeline::SlamMode::kLocalization && !load_map) {
+      throw std::invalid_argument("--mode localization needs a map (--load-map FILE)");
+    }
     const std::string fabmap_config =
         args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml");
     std::optional<place_recognition::PlaceRecognitionOptions> place_options;
@@ -187,7 +213,10 @@ int main(int argc, char** argv) {
                                  *place_options, options.loop_detection, rectifier.camera(),
                                  slam.descriptor_norm(), slam.max_match_distance()),
                              options.pose_graph, options.relocalization);
+      if (load_map) slam.LoadMap(*load_map);
+      slam.SetMode(mode);
     }
+    const std::size_t loaded_keyframes = slam.map() ? slam.map()->pose_graph().size() : 0;
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
@@ -204,6 +233,7 @@ int main(int argc, char** argv) {
     }
     const double wall_s = (NowMs() - wall_start) / 1000.0;
     const double cpu_s = CpuSeconds() - cpu_start;
+    if (save_map) slam.SaveMap(*save_map);
 
     const evaluation::Trajectory trajectory = slam.MapTrajectory();
     const evaluation::Trajectory odometry_trajectory = slam.OdometryTrajectory();
@@ -231,10 +261,17 @@ int main(int argc, char** argv) {
                       1e-9 +
                   0.05
             : 0.05;
+    const std::size_t keyframes = static_cast<std::size_t>(
+        std::count_if(slam.frames().begin(), slam.frames().end(),
+                      [](const pipeline::FrameRecord& f) { return f.is_keyframe; }));
+    const std::size_t map_keyframes = slam.map() ? slam.map()->pose_graph().size() : 0;
     std::string json = "{\"sequence\": \"" + name +
                        "\", \"frames\": " + std::to_string(sequence.size()) +
                        ", \"frames_tracked\": " + std::to_string(tracked) +
-                       ", \"keyframes\": " + std::to_string(slam.keyframe_count());
+                       ", \"keyframes\": " + std::to_string(keyframes) + ", \"mode\": \"" +
+                       (mode == pipeline::SlamMode::kMapping ? "mapping" : "localization") +
+                       "\", \"map_keyframes_loaded\": " + std::to_string(loaded_keyframes) +
+                       ", \"map_keyframes\": " + std::to_string(map_keyframes);
     char buffer[256];
     std::snprintf(buffer, sizeof(buffer),
                   ", \"wall_time_s\": %.3f, \"processing_time_s\": %.3f, \"cpu_time_s\": %.3f, "

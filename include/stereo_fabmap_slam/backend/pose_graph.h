@@ -62,6 +62,9 @@ class PoseGraph {
   // would ignore it.
   // `type`: kLoop or kRelocalization (the same constraint; kept apart for display and counts).
   void AddLoop(const map::LoopEdge& loop, PoseGraphEdgeType type = PoseGraphEdgeType::kLoop);
+  // Sets a keyframe's map pose as a saved map had it (after AddKeyframe and AddLoop have rebuilt
+  // the graph); throws for unknown ids.
+  void RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera);
   // Optimises the components that have loops, from the current map poses.
   PoseGraphSummary Optimize();
 

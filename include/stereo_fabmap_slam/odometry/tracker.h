@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -51,6 +52,11 @@ class Tracker {
   void ApplyUpdate(const map::KeyframeUpdate& update);
   // Forget the map and the motion (e.g. time went backwards); the next frame starts a new map.
   void Reset();
+  // New keyframes and map points get ids of at least these (a loaded map holds the lower ones).
+  void SkipIdsBelow(std::int64_t keyframe_id, std::int64_t point_id) {
+    next_keyframe_id_ = std::max(next_keyframe_id_, keyframe_id);
+    next_point_id_ = std::max(next_point_id_, point_id);
+  }
 
  private:
   struct Match {

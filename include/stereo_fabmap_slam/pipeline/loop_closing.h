@@ -5,6 +5,7 @@
 #include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/map/keyframe.h"
 #include "stereo_fabmap_slam/map/keyframe_update.h"
+#include "stereo_fabmap_slam/map/map_file.h"
 #include "stereo_fabmap_slam/place_recognition/loop_detector.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
@@ -49,14 +50,23 @@ class LoopClosing {
   // match's, and the pose graph is optimised. Returns the optimisation's milliseconds.
   double AddRelocalization(const map::LoopEdge& edge);
 
+  // The map as a file needs it (map/map_file.h); `camera` is the rig it was made with.
+  map::SavedMap Save(const geometry::StereoCamera& camera) const;
+  // Replaces the map with a saved one after checking that it was made with this vocabulary and
+  // `camera`; throws io::InputError saying why not, leaving the running map untouched. The next
+  // keyframe added starts a new piece of odometry (the saved map's odom is another run's).
+  void Load(const map::SavedMap& saved, const geometry::StereoCamera& camera);
+
   const backend::PoseGraph& pose_graph() const { return pose_graph_; }
   const place_recognition::LoopDetector& detector() const { return detector_; }
   bool empty() const { return pose_graph_.size() == 0; }
 
  private:
   place_recognition::LoopDetector detector_;
+  backend::PoseGraphOptions pose_graph_options_;
   backend::PoseGraph pose_graph_;
   Clock clock_;
+  bool next_starts_new_map_ = false;  // after Load
 };
 
 }  // namespace stereo_fabmap_slam::pipeline

@@ -72,6 +72,9 @@ class StereoFrontEnd {
                                    cv::Mat* place_descriptors) const;
   void ApplyUpdate(const map::KeyframeUpdate& update) { tracker_.ApplyUpdate(update); }
   void Reset() { tracker_.Reset(); }
+  void SkipIdsBelow(std::int64_t keyframe_id, std::int64_t point_id) {
+    tracker_.SkipIdsBelow(keyframe_id, point_id);
+  }
 
   const geometry::StereoCamera& camera() const { return rectifier_.camera(); }
   int descriptor_norm() const { return extractor_.descriptor_norm(); }

@@ -65,6 +65,12 @@ class StereoSlam {
                          const backend::PoseGraphOptions& pose_graph_options,
                          const relocalization::RelocalizerOptions& relocalizer_options = {});
   void SetMode(SlamMode mode) { mode_ = mode; }
+  // The map (keyframes, words, pose graph) to a file, and back. Loading replaces the map after
+  // checking the file, its vocabulary and its camera (io::InputError says what is wrong; the
+  // running map stays as it was). After a load the odometry goes on in a piece of its own until
+  // a relocalization finds it in the loaded map. Loop closing must be on.
+  void SaveMap(const std::string& path) const;
+  void LoadMap(const std::string& path);
   SlamMode mode() const { return mode_; }
 
   // Raw (unrectified) mono8 images of one stereo pair.

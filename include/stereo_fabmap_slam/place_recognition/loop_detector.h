@@ -69,6 +69,11 @@ class LoopDetector {
 
   // Adds a keyframe to the map (the database, and FAB-MAP as a place); returns it as stored.
   const map::StoredKeyframe& Add(map::Keyframe keyframe);
+  // The same for a keyframe whose words are known (a saved map's).
+  const map::StoredKeyframe& Add(map::Keyframe keyframe, std::vector<int> words);
+  // A detector with the same vocabulary, FAB-MAP model and options, and no keyframes.
+  LoopDetector WithoutKeyframes() const;
+  std::uint64_t vocabulary_fingerprint() const { return vocabulary_fingerprint_; }
   // Looks for a loop of a new keyframe, then (if add_to_map) adds it to the map.
   LoopDetection Process(map::Keyframe keyframe, bool add_to_map = true);
   // The same query for a keyframe already in the map (std::out_of_range for an unknown id).
@@ -101,6 +106,7 @@ class LoopDetector {
   geometry::StereoCamera camera_;
   int descriptor_norm_;
   double max_descriptor_distance_;
+  std::uint64_t vocabulary_fingerprint_;
   map::KeyframeDatabase database_;
   std::vector<std::int64_t> place_keyframes_;  // FAB-MAP place index -> keyframe id
 };

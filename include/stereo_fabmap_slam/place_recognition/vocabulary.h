@@ -33,6 +33,9 @@ class Vocabulary {
   void Save(const std::string& path) const;
   static Vocabulary Load(const std::string& path);
   bool operator==(const Vocabulary& other) const;
+  // A hash of the whole tree: two vocabularies with the same fingerprint quantise alike, so a map
+  // saved with one can be used with the other.
+  std::uint64_t Fingerprint() const;
 
  private:
   struct Node {

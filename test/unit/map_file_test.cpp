@@ -1,0 +1,192 @@
+// Map files: a saved map comes back exactly; a damaged file, a map of another vocabulary or
+// another camera is refused with a message, and the running map stays as it was.
+#include "stereo_fabmap_slam/map/map_file.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <gtest/gtest.h>
+
+#include "stereo_fabmap_slam/geometry/relative_pose_error.h"
+#include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_fabmap_slam/pipeline/loop_closing.h"
+#include "stereo_world.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+// A detector over a small vocabulary trained on random descriptors (seeded: another seed gives
+// another vocabulary).
+place_recognition::LoopDetector MakeDetector(std::uint64_t seed) {
+  cv::Mat training(400, 64, CV_8U);
+  cv::RNG rng(seed);
+  rng.fill(training, cv::RNG::UNIFORM, 0, 256);
+  place_recognition::VocabularyOptions vocabulary_options;
+  vocabulary_options.branching = 4;
+  vocabulary_options.depth = 2;
+  place_recognition::Vocabulary vocabulary =
+      place_recognition::Vocabulary::Train(training, vocabulary_options);
+  std::vector<std::vector<int>> word_sets;
+  for (int image = 0; image < 8; ++image) {
+    word_sets.push_back(vocabulary.WordSet(training.rowRange(image * 50, image * 50 + 50)));
+  }
+  place_recognition::FabMap fabmap(
+      place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size()),
+      place_recognition::FabMapOptions());
+  return place_recognition::LoopDetector(place_recognition::LoopDetectorOptions(),
+                                         std::move(vocabulary), std::move(fabmap), kTestCamera,
+                                         cv::NORM_HAMMING, 60.0);
+}
+
+pipeline::LoopClosing MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
+  pipeline::LoopClosing map(MakeDetector(vocabulary_seed), backend::PoseGraphOptions(),
+                            [] { return 0.0; });
+  StereoWorld world;
+  world.Add(RandomPoints(300, 3), 5);
+  for (int i = 0; i < keyframes; ++i) {
+    map::Keyframe keyframe;
+    keyframe.id = i;
+    keyframe.timestamp = 100.0 + 0.5 * i;
+    keyframe.T_world_camera = Eigen::Translation3d(0.1 * i, 0.0, 0.02 * i) *
+                              Eigen::AngleAxisd(0.05 * i, Eigen::Vector3d::UnitY());
+    keyframe.starts_new_map = i == 3;  // two pieces of odometry
+    keyframe.features = Observe(world, keyframe.T_world_camera);
+    keyframe.map_point_ids.resize(keyframe.features.size());
+    for (std::size_t k = 0; k < keyframe.map_point_ids.size(); ++k) {
+      keyframe.map_point_ids[k] = k % 3 == 0 ? -1 : static_cast<std::int64_t>(1000 * i + k);
+    }
+    keyframe.place_descriptors = cv::Mat(40, 64, CV_8U);
+    cv::RNG(static_cast<std::uint64_t>(50 + i))
+        .fill(keyframe.place_descriptors, cv::RNG::UNIFORM, 0, 256);
+    map.AddKeyframe(keyframe, map::KeyframeUpdate());
+  }
+  if (keyframes < 5) return map;
+  // A relocalization edge joining the two pieces.
+  map::LoopEdge edge;
+  edge.match_id = 1;
+  edge.query_id = 4;
+  edge.T_match_query = Eigen::Translation3d(0.3, 0.0, 0.05) * Eigen::Isometry3d::Identity();
+  edge.information = geometry::DiagonalPoseInformation(0.02, 0.2);
+  map.AddRelocalization(edge);
+  return map;
+}
+
+// `pose_tolerance`: map poses pass through the pose graph's quaternions when a map is loaded into
+// a running one (1e-12 relative); through a file alone they come back bit for bit.
+void ExpectSameMaps(const map::SavedMap& a, const map::SavedMap& b, double pose_tolerance = 0.0) {
+  EXPECT_EQ(a.vocabulary_fingerprint, b.vocabulary_fingerprint);
+  EXPECT_EQ(a.camera.size, b.camera.size);
+  EXPECT_EQ(a.camera.fx, b.camera.fx);
+  EXPECT_EQ(a.camera.baseline, b.camera.baseline);
+  ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
+  for (std::size_t i = 0; i < a.keyframes.size(); ++i) {
+    const map::Keyframe& x = a.keyframes[i].keyframe;
+    const map::Keyframe& y = b.keyframes[i].keyframe;
+    EXPECT_EQ(x.id, y.id);
+    EXPECT_EQ(x.timestamp, y.timestamp);
+    EXPECT_EQ(x.starts_new_map, y.starts_new_map);
+    EXPECT_EQ(x.T_world_camera.matrix(), y.T_world_camera.matrix());
+    if (pose_tolerance == 0.0) {
+      EXPECT_EQ(a.keyframes[i].T_map_camera.matrix(), b.keyframes[i].T_map_camera.matrix());
+    } else {
+      EXPECT_TRUE(
+          a.keyframes[i].T_map_camera.isApprox(b.keyframes[i].T_map_camera, pose_tolerance));
+    }
+    ASSERT_EQ(x.features.size(), y.features.size());
+    EXPECT_EQ(cv::norm(x.features.descriptors, y.features.descriptors, cv::NORM_HAMMING), 0.0);
+    EXPECT_EQ(x.features.u_right, y.features.u_right);
+    EXPECT_EQ(x.features.points, y.features.points);
+    EXPECT_EQ(x.map_point_ids, y.map_point_ids);
+    for (std::size_t k = 0; k < x.features.size(); ++k) {
+      EXPECT_EQ(x.features.keypoints[k].pt, y.features.keypoints[k].pt);
+      EXPECT_EQ(x.features.keypoints[k].size, y.features.keypoints[k].size);
+    }
+    EXPECT_EQ(a.keyframes[i].words, b.keyframes[i].words);
+  }
+  ASSERT_EQ(a.edges.size(), b.edges.size());
+  for (std::size_t i = 0; i < a.edges.size(); ++i) {
+    EXPECT_EQ(a.edges[i].edge.match_id, b.edges[i].edge.match_id);
+    EXPECT_EQ(a.edges[i].edge.query_id, b.edges[i].edge.query_id);
+    EXPECT_EQ(a.edges[i].edge.T_match_query.matrix(), b.edges[i].edge.T_match_query.matrix());
+    EXPECT_EQ(a.edges[i].edge.information, b.edges[i].edge.information);
+    EXPECT_EQ(a.edges[i].relocalization, b.edges[i].relocalization);
+  }
+}
+
+std::vector<char> ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+}
+
+void WriteBytes(const std::string& path, const std::vector<char>& bytes) {
+  std::ofstream(path, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST(MapFile, RoundTripsExactlyThroughAFileAndIntoAnotherMap) {
+  TemporaryDirectory temp;
+  const std::string path = temp.path() + "/map.bin";
+  const pipeline::LoopClosing original = MakeMap(7, 6);
+  const map::SavedMap saved = original.Save(kTestCamera);
+  ASSERT_EQ(saved.keyframes.size(), 6u);
+  ASSERT_EQ(saved.edges.size(), 1u);
+  map::SaveMapFile(path, saved);
+  ExpectSameMaps(saved, map::LoadMapFile(path));
+
+  // Loaded into a running map of the same vocabulary, it replaces that map: the same keyframes,
+  // map poses, edges and pieces of odometry, so saving again gives the same map.
+  pipeline::LoopClosing other = MakeMap(7, 2);
+  other.Load(map::LoadMapFile(path), kTestCamera);
+  ExpectSameMaps(saved, other.Save(kTestCamera), 1e-12);
+  EXPECT_TRUE(other.pose_graph().Connected(0, 5));  // joined by the relocalization edge
+  EXPECT_EQ(other.detector().database().Get(4).segment, 1);
+}
+
+TEST(MapFile, DamagedFilesAreRefused) {
+  TemporaryDirectory temp;
+  const std::string path = temp.path() + "/map.bin";
+  map::SaveMapFile(path, MakeMap(7, 6).Save(kTestCamera));
+  const std::vector<char> bytes = ReadBytes(path);
+
+  std::vector<char> flipped = bytes;
+  flipped[flipped.size() / 2] ^= 0x10;
+  WriteBytes(temp.path() + "/flipped.bin", flipped);
+  EXPECT_THROW(map::LoadMapFile(temp.path() + "/flipped.bin"), io::InputError);
+
+  WriteBytes(temp.path() + "/truncated.bin",
+             std::vector<char>(bytes.begin(), bytes.begin() + bytes.size() * 2 / 3));
+  EXPECT_THROW(map::LoadMapFile(temp.path() + "/truncated.bin"), io::InputError);
+
+  EXPECT_THROW(map::LoadMapFile(temp.path() + "/missing.bin"), io::InputError);
+}
+
+TEST(MapFile, AMapOfAnotherVocabularyOrCameraIsRefusedAndTheRunningMapKept) {
+  const map::SavedMap saved = MakeMap(7, 6).Save(kTestCamera);
+  pipeline::LoopClosing running = MakeMap(8, 2);  // another vocabulary
+  const map::SavedMap before = running.Save(kTestCamera);
+  try {
+    running.Load(saved, kTestCamera);
+    ADD_FAILURE() << "a map of another vocabulary was loaded";
+  } catch (const io::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("vocabulary"), std::string::npos) << error.what();
+  }
+  ExpectSameMaps(before, running.Save(kTestCamera), 1e-12);
+
+  pipeline::LoopClosing same_vocabulary = MakeMap(7, 2);
+  const map::SavedMap kept = same_vocabulary.Save(kTestCamera);
+  geometry::StereoCamera other_camera = kTestCamera;
+  other_camera.baseline = 0.12;
+  try {
+    same_vocabulary.Load(saved, other_camera);
+    ADD_FAILURE() << "a map of another camera was loaded";
+  } catch (const io::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("camera"), std::string::npos) << error.what();
+  }
+  ExpectSameMaps(kept, same_vocabulary.Save(kTestCamera), 1e-12);
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
