@@ -35,7 +35,11 @@ class BackendNodelet : public nodelet::Nodelet {
   void Work();
   // Adds to the graph the loop edges whose keyframes it has (the LoopDetector may be ahead of
   // the bundle adjustment); true if any was added. The others wait.
-  bool AddReadyLoops(backend::PoseGraph* graph, std::deque<map::LoopEdge>* loops);
+  struct Edge {
+    map::LoopEdge edge;
+    backend::PoseGraphEdgeType type;  // a loop, or a relocalization
+  };
+  bool AddReadyLoops(backend::PoseGraph* graph, std::deque<Edge>* loops);
 
   backend::BundleAdjustmentOptions options_;
   backend::PoseGraphOptions pose_graph_options_;
@@ -51,7 +55,7 @@ class BackendNodelet : public nodelet::Nodelet {
   // from the map would leave a hole in the graph. Under load the worker adjusts the newest of
   // them together and skips the optimisations in between (see Work()).
   std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
-  std::deque<map::LoopEdge> loop_queue_;
+  std::deque<Edge> loop_queue_;
   bool stopping_ = false;
   std::thread worker_;
 
@@ -108,7 +112,9 @@ void BackendNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyf
 void BackendNodelet::OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    loop_queue_.push_back(ros_conversions::FromLoopEdgeMessage(*loop));
+    loop_queue_.push_back({ros_conversions::FromLoopEdgeMessage(*loop),
+                           loop->relocalization ? backend::PoseGraphEdgeType::kRelocalization
+                                                : backend::PoseGraphEdgeType::kLoop});
   }
   wake_.notify_one();
 }
@@ -128,7 +134,7 @@ void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
 void BackendNodelet::Work() {
   std::unique_ptr<backend::LocalBundleAdjuster> adjuster;
   backend::PoseGraph graph(pose_graph_options_);
-  std::deque<map::LoopEdge> pending_loops;  // their keyframes have not arrived yet
+  std::deque<Edge> pending_loops;  // their keyframes have not arrived yet
   while (true) {
     std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
     {
@@ -190,19 +196,19 @@ void BackendNodelet::Work() {
   }
 }
 
-bool BackendNodelet::AddReadyLoops(backend::PoseGraph* graph, std::deque<map::LoopEdge>* loops) {
+bool BackendNodelet::AddReadyLoops(backend::PoseGraph* graph, std::deque<Edge>* loops) {
   bool added = false;
   for (auto it = loops->begin(); it != loops->end();) {
-    if (!graph->Contains(it->query_id) || !graph->Contains(it->match_id)) {
+    if (!graph->Contains(it->edge.query_id) || !graph->Contains(it->edge.match_id)) {
       ++it;
       continue;
     }
     try {
-      graph->AddLoop(*it);
+      graph->AddLoop(it->edge, it->type);
       added = true;
     } catch (const std::exception& error) {
-      NODELET_WARN("loop edge %ld -> %ld ignored: %s", static_cast<long>(it->query_id),
-                   static_cast<long>(it->match_id), error.what());
+      NODELET_WARN("loop edge %ld -> %ld ignored: %s", static_cast<long>(it->edge.query_id),
+                   static_cast<long>(it->edge.match_id), error.what());
     }
     it = loops->erase(it);
   }

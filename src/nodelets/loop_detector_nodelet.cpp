@@ -1,7 +1,13 @@
-// LoopDetector: keyframes in, verified loop edges out, and the detect_loop service. Everything
-// algorithmic is place_recognition::LoopDetector; this file converts, queues and publishes.
+// LoopDetector: keyframes in, verified loop edges out, the detect_loop service, and the
+// relocalize_frame service the StereoTracker calls (after a tracking loss, and for the user's
+// relocalize). Everything algorithmic is place_recognition::LoopDetector and
+// relocalization::Relocalizer; this file converts, queues and publishes. Map poses and which
+// keyframes form one map come from the Backend's map_graph.
+#include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -9,14 +15,19 @@
 #include <thread>
 
 #include <nodelet/nodelet.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
+#include <stereo_fabmap_slam/MapGraph.h>
+#include <stereo_fabmap_slam/RelocalizeFrame.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
+#include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/pipeline/loop_closing.h"
+#include "stereo_fabmap_slam/relocalization/relocalizer.h"
 
 namespace stereo_fabmap_slam {
 
@@ -29,6 +40,9 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   void OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe);
   bool OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
                     stereo_fabmap_slam::DetectLoop::Response& response);
+  bool OnRelocalizeFrame(stereo_fabmap_slam::RelocalizeFrame::Request& request,
+                         stereo_fabmap_slam::RelocalizeFrame::Response& response);
+  void OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph);
   void Work();
   // The detector needs the camera, which arrives with the first keyframe. Call with mutex_.
   place_recognition::LoopDetector& Detector(const stereo_fabmap_slam::Keyframe& message);
@@ -37,10 +51,31 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   place_recognition::LoopDetectorOptions detector_options_;
   features::DescriptorKind descriptor_;
   std::optional<place_recognition::LoopDetector> detector_;
+  relocalization::RelocalizerOptions relocalizer_options_;
+  std::optional<relocalization::Relocalizer> relocalizer_;  // made with the detector
 
-  ros::Subscriber keyframe_subscriber_;
+  // From the latest map_graph: map poses, and the component (keyframes joined by odometry, loop
+  // and relocalization edges) of each keyframe; the map is the first keyframe's component.
+  struct MapView {
+    std::map<std::int64_t, Eigen::Isometry3d> poses;
+    std::map<std::int64_t, std::int64_t> component;  // keyframe -> its component's first id
+    std::int64_t first = -1;
+    Eigen::Isometry3d map_to_odom = Eigen::Isometry3d::Identity();
+    bool InMap(std::int64_t id) const {
+      const auto it = component.find(id);
+      return first >= 0 && it != component.end() && it->second == component.at(first);
+    }
+  };
+  std::mutex map_view_mutex_;
+  MapView map_view_;
+
+  ros::Subscriber keyframe_subscriber_, graph_subscriber_;
   ros::Publisher loop_publisher_;
-  ros::ServiceServer detect_service_;
+  ros::ServiceServer detect_service_, relocalize_service_;
+  // relocalize_frame runs on a queue and thread of its own: the StereoTracker calls it from its
+  // image callback, which must not wait for a free thread of the manager's pool.
+  ros::CallbackQueue relocalize_queue_;
+  std::unique_ptr<ros::AsyncSpinner> relocalize_spinner_;
 
   std::mutex mutex_;  // the detector: the worker and the service share it
   std::mutex queue_mutex_;
@@ -65,6 +100,7 @@ void LoopDetectorNodelet::onInit() {
     place_options_ =
         place_recognition::LoadPlaceRecognitionOptions(fabmap_config, odometry_features);
     detector_options_ = ros_parameters::ReadModuleOptions(private_node, detector_options_);
+    relocalizer_options_ = ros_parameters::ReadModuleOptions(private_node, relocalizer_options_);
     // Load the vocabulary once now, so that a missing or damaged file stops start-up.
     place_recognition::Vocabulary::Load(place_options_.vocabulary_directory + "/vocabulary.bin");
   } catch (const std::exception& error) {
@@ -73,15 +109,24 @@ void LoopDetectorNodelet::onInit() {
   }
   NODELET_INFO_STREAM("vocabulary " << place_options_.vocabulary_directory
                                     << "; options in force:\n"
-                                    << ros_parameters::PrintedOptions(detector_options_));
+                                    << ros_parameters::PrintedOptions(detector_options_)
+                                    << ros_parameters::PrintedOptions(relocalizer_options_));
   ros::NodeHandle& node = getNodeHandle();
   loop_publisher_ = node.advertise<stereo_fabmap_slam::LoopEdge>("loop_edges", 100);
   detect_service_ = node.advertiseService("detect_loop", &LoopDetectorNodelet::OnDetectLoop, this);
+  ros::NodeHandle relocalize_node(node);
+  relocalize_node.setCallbackQueue(&relocalize_queue_);
+  relocalize_service_ = relocalize_node.advertiseService(
+      "relocalize_frame", &LoopDetectorNodelet::OnRelocalizeFrame, this);
+  relocalize_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &relocalize_queue_);
+  relocalize_spinner_->start();
+  graph_subscriber_ = node.subscribe("map_graph", 1, &LoopDetectorNodelet::OnMapGraph, this);
   worker_ = std::thread(&LoopDetectorNodelet::Work, this);
   keyframe_subscriber_ = node.subscribe("keyframes", 100, &LoopDetectorNodelet::OnKeyframe, this);
 }
 
 LoopDetectorNodelet::~LoopDetectorNodelet() {
+  if (relocalize_spinner_) relocalize_spinner_->stop();
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     stopping_ = true;
@@ -93,11 +138,41 @@ LoopDetectorNodelet::~LoopDetectorNodelet() {
 place_recognition::LoopDetector& LoopDetectorNodelet::Detector(
     const stereo_fabmap_slam::Keyframe& message) {
   if (!detector_) {
-    detector_.emplace(pipeline::LoopClosing::LoadDetector(
-        place_options_, detector_options_, ros_conversions::CameraOfKeyframe(message),
-        descriptor_.norm, descriptor_.max_match_distance));
+    const geometry::StereoCamera camera = ros_conversions::CameraOfKeyframe(message);
+    detector_.emplace(pipeline::LoopClosing::LoadDetector(place_options_, detector_options_, camera,
+                                                          descriptor_.norm,
+                                                          descriptor_.max_match_distance));
+    relocalizer_.emplace(relocalizer_options_, camera, descriptor_.norm,
+                         descriptor_.max_match_distance);
   }
   return *detector_;
+}
+
+void LoopDetectorNodelet::OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph) {
+  MapView view;
+  // Union-find over the graph's edges; each component is named by its smallest id.
+  std::map<std::int64_t, std::int64_t> parent;
+  const std::function<std::int64_t(std::int64_t)> root = [&](std::int64_t id) {
+    while (parent[id] != id) id = parent[id] = parent[parent[id]];
+    return id;
+  };
+  for (std::size_t i = 0; i < graph->keyframe_ids.size(); ++i) {
+    const auto id = static_cast<std::int64_t>(graph->keyframe_ids[i]);
+    parent[id] = id;
+    view.poses[id] = ros_conversions::FromPoseMessage(graph->keyframe_poses[i]);
+  }
+  for (const stereo_fabmap_slam::MapGraphEdge& edge : graph->edges) {
+    const auto a = static_cast<std::int64_t>(edge.from_id),
+               b = static_cast<std::int64_t>(edge.to_id);
+    if (parent.count(a) == 0 || parent.count(b) == 0) continue;
+    const std::int64_t ra = root(a), rb = root(b);
+    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+  }
+  for (const auto& entry : parent) view.component[entry.first] = root(entry.first);
+  if (!view.poses.empty()) view.first = view.poses.begin()->first;
+  view.map_to_odom = ros_conversions::FromTransformMessage(graph->map_to_odom);
+  std::lock_guard<std::mutex> lock(map_view_mutex_);
+  map_view_ = std::move(view);
 }
 
 void LoopDetectorNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe) {
@@ -187,6 +262,86 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
     response.success = false;
     response.message = error.what();
   }
+  return true;
+}
+
+bool LoopDetectorNodelet::OnRelocalizeFrame(
+    stereo_fabmap_slam::RelocalizeFrame::Request& request,
+    stereo_fabmap_slam::RelocalizeFrame::Response& response) {
+  const auto start = std::chrono::steady_clock::now();
+  MapView view;
+  {
+    std::lock_guard<std::mutex> lock(map_view_mutex_);
+    view = map_view_;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    if (!detector_ || detector_->database().empty()) {
+      response.status = "empty map";
+      response.message = "the map is empty";
+      return true;
+    }
+    const bool recover = request.mode == stereo_fabmap_slam::RelocalizeFrame::Request::RECOVER;
+    if (recover && view.InMap(request.reference_keyframe_id)) {
+      response.already_joined = true;
+      response.status = "success";
+      response.message = "the frame's piece of odometry is in the map already";
+      return true;
+    }
+    const map::Keyframe frame = ros_conversions::FromKeyframeMessage(request.frame);
+    const relocalization::Relocalization result =
+        relocalizer_->Relocalize(frame.features, detector_->Words(frame.place_descriptors),
+                                 *detector_, [&](const map::StoredKeyframe& keyframe) {
+                                   return !recover || view.InMap(keyframe.keyframe.id);
+                                 });
+    response.success = result.success();
+    response.status = relocalization::RelocalizationStatusName(result.status);
+    response.message = result.reason;
+    response.matches = result.matches;
+    response.inliers = result.inliers;
+    response.probability = result.probability;
+    if (result.success()) {
+      response.keyframe_id = static_cast<std::uint64_t>(result.keyframe_id);
+      response.T_keyframe_camera = ros_conversions::ToPoseMessage(result.T_keyframe_camera);
+      // The keyframe's map pose from the latest map_graph; a keyframe too new to be in it yet
+      // (the Backend publishes after adjusting it) is placed by its odometry and map -> odom.
+      const auto pose = view.poses.find(result.keyframe_id);
+      const Eigen::Isometry3d T_map_keyframe =
+          pose != view.poses.end()
+              ? pose->second
+              : view.map_to_odom *
+                    detector_->database().Get(result.keyframe_id).keyframe.T_world_camera;
+      response.map_pose_known = pose != view.poses.end() || view.first >= 0;
+      response.T_map_camera =
+          ros_conversions::ToPoseMessage(T_map_keyframe * result.T_keyframe_camera);
+      if (request.add_edge && request.reference_keyframe_id >= 0 &&
+          request.reference_keyframe_id != result.keyframe_id) {
+        map::LoopEdge edge;
+        edge.match_id = result.keyframe_id;
+        edge.query_id = request.reference_keyframe_id;
+        edge.T_match_query = result.T_keyframe_camera *
+                             ros_conversions::FromPoseMessage(request.T_reference_camera).inverse();
+        edge.information = geometry::DiagonalPoseInformation(
+            relocalizer_options_.translation_sigma, relocalizer_options_.rotation_sigma_deg);
+        edge.inliers = result.inliers;
+        edge.probability = result.probability;
+        stereo_fabmap_slam::LoopEdge message = ros_conversions::ToLoopEdgeMessage(edge);
+        message.header = request.frame.header;
+        message.relocalization = true;
+        loop_publisher_.publish(message);
+        response.edge_added = true;
+        NODELET_INFO("relocalized: keyframe %ld joined to %ld, %d inliers",
+                     static_cast<long>(edge.query_id), static_cast<long>(edge.match_id),
+                     result.inliers);
+      }
+    }
+  } catch (const std::exception& error) {
+    response.success = false;
+    response.status = "error";
+    response.message = error.what();
+  }
+  response.time_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return true;
 }
 

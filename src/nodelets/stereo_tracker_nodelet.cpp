@@ -1,7 +1,11 @@
-// StereoTracker: synchronised raw stereo images in, odometry, tf odom -> camera and keyframes out.
-// Everything algorithmic is pipeline::StereoFrontEnd; this file converts and publishes.
+// StereoTracker: synchronised raw stereo images in, odometry, tf odom -> camera and keyframes out;
+// the relocalize service. After a tracking loss it asks the LoopDetector (relocalize_frame) to
+// find frames in the map until one is found, whose edge joins the new piece of odometry to the
+// map. Everything algorithmic is pipeline::StereoFrontEnd and the LoopDetector's Relocalizer;
+// this file converts, calls and publishes.
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -16,9 +20,13 @@
 #include <message_filters/synchronizer.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <stereo_fabmap_slam/MapGraph.h>
+#include <stereo_fabmap_slam/Relocalize.h>
+#include <stereo_fabmap_slam/RelocalizeFrame.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
@@ -27,10 +35,16 @@
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/relocalization/relocalization_options.h"
 
 namespace stereo_fabmap_slam {
 
 class StereoTrackerNodelet : public nodelet::Nodelet {
+ public:
+  ~StereoTrackerNodelet() override {
+    if (service_spinner_) service_spinner_->stop();  // before the members its callback uses
+  }
+
  private:
   using Image = sensor_msgs::Image;
   using ExactPolicy = message_filters::sync_policies::ExactTime<Image, Image>;
@@ -47,10 +61,16 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   // Counts images of one side; warns when more go unpaired than the sync queue can hold.
   void OnSingleImage(std::atomic<std::uint64_t>* count);
   void Publish(const ros::Time& stamp, const odometry::TrackingResult& result);
+  // After tracking: attempts a relocalization if one is due (recovery after a loss, or a user's
+  // request), and answers the request. Call with mutex_.
+  void RelocalizeIfDue(const ros::Time& stamp, const pipeline::FrontEndOutput& output);
+  bool OnRelocalize(stereo_fabmap_slam::Relocalize::Request& request,
+                    stereo_fabmap_slam::Relocalize::Response& response);
 
   camera::RectificationOptions rectification_options_;
   pipeline::FrontEndOptions options_;
-  std::string odom_frame_, camera_frame_;
+  relocalization::RelocalizerOptions relocalizer_options_;
+  std::string odom_frame_, camera_frame_, map_frame_;
   std::mutex mutex_;  // image and update callbacks may run on different manager threads
   std::unique_ptr<pipeline::StereoFrontEnd> front_end_;
   ros::Time last_stamp_;
@@ -63,8 +83,28 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproximatePolicy>> approximate_sync_;
   std::unique_ptr<message_filters::Synchronizer<InfoPolicy>> info_sync_;
-  ros::Subscriber update_subscriber_;
+  ros::Subscriber update_subscriber_, graph_subscriber_;
   ros::Publisher odometry_publisher_, keyframe_publisher_;
+  ros::ServiceClient relocalize_frame_client_;
+  ros::ServiceServer relocalize_service_;
+  ros::CallbackQueue service_queue_;
+  std::unique_ptr<ros::AsyncSpinner> service_spinner_;
+
+  // Recovery: set by a loss while there is a map, cleared when a frame is found in it.
+  std::atomic<bool> map_has_keyframes_{false};  // from map_graph
+  bool recovering_ = false;
+  int frames_since_attempt_ = 0;
+
+  // A user's relocalize request, answered by the next frame's image callback.
+  struct Request {
+    bool pending = false, answered = false, reanchor = false;
+    stereo_fabmap_slam::RelocalizeFrame::Response result;
+    ros::Time stamp;
+    std::string failure;  // set if the frame could not be relocalized at all
+  };
+  std::mutex request_mutex_;
+  std::condition_variable request_answered_;
+  Request request_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
 };
 
@@ -84,6 +124,8 @@ void StereoTrackerNodelet::LoadOptions(const ros::NodeHandle& private_node) {
     options = ros_parameters::ReadModuleOptions(private_node, options);
     printed += ros_parameters::PrintedOptions(options);
   });
+  relocalizer_options_ = ros_parameters::ReadModuleOptions(private_node, relocalizer_options_);
+  printed += ros_parameters::PrintedOptions(relocalizer_options_);
   // Loop closing needs place descriptors in every keyframe, with place recognition's own key
   // point selection (config/fabmap.yaml).
   if (private_node.param("loop_closing", true)) {
@@ -110,6 +152,7 @@ void StereoTrackerNodelet::onInit() {
   }
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
   camera_frame_ = private_node.param<std::string>("camera_frame", "camera");
+  map_frame_ = private_node.param<std::string>("map_frame", "map");
   const int queue_size = private_node.param("queue_size", 10);
   queue_size_ = queue_size;
   const bool approximate = private_node.param("approximate_sync", false);
@@ -144,6 +187,22 @@ void StereoTrackerNodelet::onInit() {
   update_subscriber_ =
       node.subscribe("keyframe_updates", 100, &StereoTrackerNodelet::OnKeyframeUpdate, this);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  if (options_.place_features) {
+    relocalize_frame_client_ =
+        node.serviceClient<stereo_fabmap_slam::RelocalizeFrame>("relocalize_frame", true);
+    graph_subscriber_ = node.subscribe<stereo_fabmap_slam::MapGraph>(
+        "map_graph", 1, [this](const stereo_fabmap_slam::MapGraphConstPtr& graph) {
+          map_has_keyframes_ = !graph->keyframe_ids.empty();
+        });
+    // On a queue and thread of its own: the call waits for the next frame, which the image
+    // callback handles meanwhile, and must not hold a thread of the manager's pool.
+    ros::NodeHandle service_node(node);
+    service_node.setCallbackQueue(&service_queue_);
+    relocalize_service_ =
+        service_node.advertiseService("relocalize", &StereoTrackerNodelet::OnRelocalize, this);
+    service_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &service_queue_);
+    service_spinner_->start();
+  }
 
   left_subscriber_.subscribe(node, "left/image_raw", queue_size);
   right_subscriber_.subscribe(node, "right/image_raw", queue_size);
@@ -233,6 +292,7 @@ void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_messa
       NODELET_WARN_THROTTLE(2, "tracking lost: %s", output.tracking.reason.c_str());
     }
     Publish(stamp, output.tracking);
+    if (options_.place_features) RelocalizeIfDue(stamp, output);
   } catch (const std::exception& error) {
     NODELET_WARN_THROTTLE(5, "frame skipped: %s", error.what());
   }
@@ -259,6 +319,126 @@ void StereoTrackerNodelet::Publish(const ros::Time& stamp, const odometry::Track
     keyframe_publisher_.publish(
         ros_conversions::ToKeyframeMessage(*result.keyframe, front_end_->camera(), odom_frame_));
   }
+}
+
+void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
+                                           const pipeline::FrontEndOutput& output) {
+  const odometry::TrackingResult& result = output.tracking;
+  // A new piece of odometry (after a loss, or a reset when time went backwards) is not in the
+  // map until a relocalization (or a loop) joins it.
+  const bool new_piece = result.keyframe && result.keyframe->starts_new_map;
+  if ((new_piece || result.state == odometry::TrackingState::kLost) && map_has_keyframes_) {
+    if (!recovering_) frames_since_attempt_ = 0;
+    recovering_ = true;
+  }
+  bool user_request;
+  {
+    std::lock_guard<std::mutex> lock(request_mutex_);
+    user_request = request_.pending && !request_.answered;
+  }
+  const bool recovery_due =
+      recovering_ && frames_since_attempt_++ % relocalizer_options_.attempt_every_n_frames == 0;
+  if (!user_request && !recovery_due) return;
+
+  stereo_fabmap_slam::RelocalizeFrame call;
+  std::string failure;
+  if (result.reference_keyframe < 0 && result.state == odometry::TrackingState::kLost) {
+    failure = "tracking is lost and the frame has too few stereo points";
+  } else {
+    map::Keyframe frame;
+    frame.timestamp = stamp.toSec();
+    frame.T_world_camera = result.T_world_camera;
+    frame.features = output.features;
+    frame.map_point_ids.assign(frame.features.size(), -1);
+    frame.place_descriptors =
+        result.keyframe ? result.keyframe->place_descriptors : front_end_->DescribeLastFrame();
+    call.request.frame =
+        ros_conversions::ToKeyframeMessage(frame, front_end_->camera(), odom_frame_);
+    call.request.frame.header.stamp = stamp;
+    call.request.mode = recovering_ ? stereo_fabmap_slam::RelocalizeFrame::Request::RECOVER
+                                    : stereo_fabmap_slam::RelocalizeFrame::Request::ANYWHERE;
+    call.request.reference_keyframe_id = result.reference_keyframe;
+    call.request.T_reference_camera = ros_conversions::ToPoseMessage(result.T_keyframe_camera);
+    bool reanchor;
+    {
+      std::lock_guard<std::mutex> lock(request_mutex_);
+      reanchor = user_request && request_.reanchor;
+    }
+    // After a loss the edge is what joins the odometry to the map; while tracking is fine it
+    // corrects map -> odom only when the user asks to re-anchor.
+    call.request.add_edge = recovering_ || reanchor;
+    if (!relocalize_frame_client_.isValid()) {
+      relocalize_frame_client_ = getNodeHandle().serviceClient<stereo_fabmap_slam::RelocalizeFrame>(
+          "relocalize_frame", true);
+    }
+    if (!relocalize_frame_client_.call(call)) {
+      failure = "the LoopDetector's relocalize_frame service is not available";
+    } else if (recovering_ && (call.response.success || call.response.already_joined)) {
+      recovering_ = false;
+      if (call.response.success) {
+        NODELET_INFO("relocalized after tracking loss against keyframe %lu (%d inliers)",
+                     static_cast<unsigned long>(call.response.keyframe_id), call.response.inliers);
+      }
+    }
+  }
+  if (!failure.empty() && !user_request) {
+    NODELET_WARN_THROTTLE(5, "relocalization: %s", failure.c_str());
+  }
+  if (user_request) {
+    std::lock_guard<std::mutex> lock(request_mutex_);
+    request_.answered = true;
+    request_.result = call.response;
+    request_.stamp = stamp;
+    request_.failure = failure;
+    request_answered_.notify_all();
+  }
+}
+
+bool StereoTrackerNodelet::OnRelocalize(stereo_fabmap_slam::Relocalize::Request& request,
+                                        stereo_fabmap_slam::Relocalize::Response& response) {
+  response.keyframe_id = -1;
+  if (!map_has_keyframes_) {
+    response.message = "map is empty";
+    return true;
+  }
+  const double timeout = request.timeout > 0 ? request.timeout : 1.0;
+  std::unique_lock<std::mutex> lock(request_mutex_);
+  if (request_.pending) {
+    response.message = "another relocalize call is waiting for a frame";
+    return true;
+  }
+  request_ = Request();
+  request_.pending = true;
+  request_.reanchor = request.reanchor;
+  const bool answered = request_answered_.wait_for(lock, std::chrono::duration<double>(timeout),
+                                                   [&] { return request_.answered; });
+  request_.pending = false;
+  if (!answered) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "no stereo images arrived within %.1f s", timeout);
+    response.message = text;
+    return true;
+  }
+  if (!request_.failure.empty()) {
+    response.message = request_.failure;
+    return true;
+  }
+  const stereo_fabmap_slam::RelocalizeFrame::Response& result = request_.result;
+  response.success = result.success && result.map_pose_known;
+  response.message = result.success && !result.map_pose_known
+                         ? "found against keyframe " + std::to_string(result.keyframe_id) +
+                               ", which the map graph does not hold yet"
+                         : result.status + ": " + result.message;
+  response.inliers = result.inliers;
+  response.probability = result.probability;
+  response.time_ms = result.time_ms;
+  if (result.success) response.keyframe_id = static_cast<std::int64_t>(result.keyframe_id);
+  if (response.success) {
+    response.pose.header.stamp = request_.stamp;
+    response.pose.header.frame_id = map_frame_;
+    response.pose.pose = result.T_map_camera;
+  }
+  return true;
 }
 
 void StereoTrackerNodelet::OnKeyframeUpdate(

@@ -282,4 +282,13 @@ geometry_msgs::Transform ToTransformMessage(const Eigen::Isometry3d& transform) 
   return message;
 }
 
+Eigen::Isometry3d FromTransformMessage(const geometry_msgs::Transform& transform) {
+  geometry_msgs::Pose pose;
+  pose.position.x = transform.translation.x;
+  pose.position.y = transform.translation.y;
+  pose.position.z = transform.translation.z;
+  pose.orientation = transform.rotation;
+  return FromPoseMessage(pose);
+}
+
 }  // namespace stereo_fabmap_slam::ros_conversions

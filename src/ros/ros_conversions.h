@@ -36,6 +36,7 @@ sensor_msgs::ImagePtr ToMono8ImageMessage(const cv::Mat& image, const ros::Time&
 geometry_msgs::Pose ToPoseMessage(const Eigen::Isometry3d& pose);
 Eigen::Isometry3d FromPoseMessage(const geometry_msgs::Pose& pose);
 geometry_msgs::Transform ToTransformMessage(const Eigen::Isometry3d& transform);
+Eigen::Isometry3d FromTransformMessage(const geometry_msgs::Transform& transform);
 
 // CameraInfo <-> rectification parameters (K, D, R, P). Only the plumb_bob model (4 or 5
 // coefficients) is accepted; anything else throws std::invalid_argument.

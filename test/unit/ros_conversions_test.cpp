@@ -23,6 +23,7 @@ TEST(RosConversions, PoseRoundTrip) {
   pose.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   pose.translation() = Eigen::Vector3d(1.5, -2.0, 0.25);
   EXPECT_TRUE(FromPoseMessage(ToPoseMessage(pose)).isApprox(pose, 1e-12));
+  EXPECT_TRUE(FromTransformMessage(ToTransformMessage(pose)).isApprox(pose, 1e-12));
   EXPECT_DOUBLE_EQ(ToPoseMessage(pose).position.y, -2.0);
 }
 
