@@ -1,6 +1,10 @@
 // Backend: keyframes and loop edges in; windowed bundle adjustment (odom frame) and the pose
 // graph (map frame) in a worker thread it owns; keyframe_updates, map_graph and tf map -> odom
-// out. The algorithms are backend::LocalBundleAdjuster and backend::PoseGraph.
+// out. A map loaded by the LoopDetector (map_loaded) replaces the pose graph; in localization
+// mode (the LoopDetector's mode topic) the graph is not extended and map -> odom is the
+// StereoTracker's latest relocalization (map_to_odom_correction). The algorithms are
+// backend::LocalBundleAdjuster and backend::PoseGraph.
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <memory>
@@ -13,6 +17,8 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <std_msgs/String.h>
+#include <stereo_fabmap_slam/MapLoaded.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
@@ -20,6 +26,8 @@
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 #include "stereo_fabmap_slam/backend/pose_graph.h"
+#include "stereo_fabmap_slam/map/map_file.h"
+#include "stereo_fabmap_slam/pipeline/loop_closing.h"
 
 namespace stereo_fabmap_slam {
 
@@ -32,6 +40,9 @@ class BackendNodelet : public nodelet::Nodelet {
   void OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe);
   void OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop);
   void OnTfTimer(const ros::WallTimerEvent&);
+  void OnMapLoaded(const stereo_fabmap_slam::MapLoadedConstPtr& message);
+  void OnMode(const std_msgs::StringConstPtr& message);
+  void OnCorrection(const geometry_msgs::TransformStampedConstPtr& message);
   void Work();
   // Adds to the graph the loop edges whose keyframes it has (the LoopDetector may be ahead of
   // the bundle adjustment); true if any was added. The others wait.
@@ -44,7 +55,8 @@ class BackendNodelet : public nodelet::Nodelet {
   backend::BundleAdjustmentOptions options_;
   backend::PoseGraphOptions pose_graph_options_;
   std::string map_frame_, odom_frame_;
-  ros::Subscriber keyframe_subscriber_, loop_subscriber_;
+  ros::Subscriber keyframe_subscriber_, loop_subscriber_, map_loaded_subscriber_, mode_subscriber_,
+      correction_subscriber_;
   ros::Publisher update_publisher_, graph_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   ros::WallTimer tf_timer_;
@@ -56,6 +68,8 @@ class BackendNodelet : public nodelet::Nodelet {
   // them together and skips the optimisations in between (see Work()).
   std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
   std::deque<Edge> loop_queue_;
+  std::optional<std::string> map_to_load_;  // a loaded map's file, for the worker
+  std::atomic<bool> localization_{false};   // localization mode: the graph is not extended
   bool stopping_ = false;
   std::thread worker_;
 
@@ -86,6 +100,10 @@ void BackendNodelet::onInit() {
   worker_ = std::thread(&BackendNodelet::Work, this);
   keyframe_subscriber_ = node.subscribe("keyframes", 100, &BackendNodelet::OnKeyframe, this);
   loop_subscriber_ = node.subscribe("loop_edges", 100, &BackendNodelet::OnLoopEdge, this);
+  map_loaded_subscriber_ = node.subscribe("map_loaded", 1, &BackendNodelet::OnMapLoaded, this);
+  mode_subscriber_ = node.subscribe("mode", 1, &BackendNodelet::OnMode, this);
+  correction_subscriber_ =
+      node.subscribe("map_to_odom_correction", 10, &BackendNodelet::OnCorrection, this);
   // map -> odom is broadcast steadily, not only when it changes, so that tf can look up any
   // recent time without extrapolating.
   tf_timer_ =
@@ -119,6 +137,24 @@ void BackendNodelet::OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop
   wake_.notify_one();
 }
 
+void BackendNodelet::OnMapLoaded(const stereo_fabmap_slam::MapLoadedConstPtr& message) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    map_to_load_ = message->path;
+  }
+  wake_.notify_one();
+}
+
+void BackendNodelet::OnMode(const std_msgs::StringConstPtr& message) {
+  localization_ = message->data == "localization";
+}
+
+void BackendNodelet::OnCorrection(const geometry_msgs::TransformStampedConstPtr& message) {
+  if (!localization_) return;  // mapping: the pose graph owns map -> odom
+  std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
+  map_to_odom_ = ros_conversions::FromTransformMessage(message->transform);
+}
+
 void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
   geometry_msgs::TransformStamped transform;
   {
@@ -134,16 +170,33 @@ void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
 void BackendNodelet::Work() {
   std::unique_ptr<backend::LocalBundleAdjuster> adjuster;
   backend::PoseGraph graph(pose_graph_options_);
-  std::deque<Edge> pending_loops;  // their keyframes have not arrived yet
+  std::deque<Edge> pending_loops;    // their keyframes have not arrived yet
+  bool next_starts_new_map = false;  // after a load: this run's odometry is a new piece
   while (true) {
     std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
+    std::optional<std::string> load;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || !queue_.empty() || !loop_queue_.empty(); });
+      wake_.wait(lock, [&] {
+        return stopping_ || !queue_.empty() || !loop_queue_.empty() || map_to_load_;
+      });
       if (stopping_) return;
       waiting.swap(queue_);
       pending_loops.insert(pending_loops.end(), loop_queue_.begin(), loop_queue_.end());
       loop_queue_.clear();
+      load.swap(map_to_load_);
+    }
+    if (load) {
+      // The LoopDetector checked the file; the graph is rebuilt from the same file.
+      try {
+        graph =
+            pipeline::LoopClosing::RestorePoseGraph(map::LoadMapFile(*load), pose_graph_options_);
+        pending_loops.clear();
+        next_starts_new_map = true;
+        NODELET_INFO("pose graph of %s: %zu keyframes", load->c_str(), graph.size());
+      } catch (const std::exception& error) {
+        NODELET_ERROR("map %s not loaded into the pose graph: %s", load->c_str(), error.what());
+      }
     }
     if (waiting.size() > 1) {
       NODELET_WARN_THROTTLE(5,
@@ -165,7 +218,12 @@ void BackendNodelet::Work() {
         }
         const map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
         const map::KeyframeUpdate update = adjuster->AddKeyframe(keyframe, optimise);
-        graph.AddKeyframe(keyframe.id, keyframe.T_world_camera, keyframe.starts_new_map);
+        // Keyframes made before a map was loaded (ids below the map's) stay out of its graph.
+        if (!localization_ && keyframe.id > graph.last_id()) {
+          graph.AddKeyframe(keyframe.id, keyframe.T_world_camera,
+                            keyframe.starts_new_map || next_starts_new_map);
+          next_starts_new_map = false;
+        }
         for (const auto& [id, pose] : update.keyframe_poses) {
           if (graph.Contains(id)) graph.UpdateOdometryPose(id, pose);
         }
@@ -184,6 +242,8 @@ void BackendNodelet::Work() {
       const backend::PoseGraphSummary summary = graph.Optimize();
       NODELET_INFO("pose graph: %zu keyframes optimised in %d iterations", graph.size(),
                    summary.iterations);
+    }
+    if (!localization_ && graph.size() > 0) {
       std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
       map_to_odom_ = graph.MapToOdom();
     }

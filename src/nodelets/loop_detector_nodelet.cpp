@@ -1,8 +1,10 @@
 // LoopDetector: keyframes in, verified loop edges out, the detect_loop service, and the
 // relocalize_frame service the StereoTracker calls (after a tracking loss, and for the user's
-// relocalize). Everything algorithmic is place_recognition::LoopDetector and
-// relocalization::Relocalizer; this file converts, queues and publishes. Map poses and which
-// keyframes form one map come from the Backend's map_graph.
+// relocalize). It keeps the map's keyframes, so it also offers save_map, load_map (and
+// ~map_file at start) and set_mode (~mode), announcing a loaded map (map_loaded) and the mode
+// (mode) to the other nodelets. Everything algorithmic is place_recognition::LoopDetector,
+// relocalization::Relocalizer and the map file; this file converts, queues and publishes. Map
+// poses and which keyframes form one map come from the Backend's map_graph.
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -17,16 +19,23 @@
 #include <nodelet/nodelet.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <std_msgs/String.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
+#include <stereo_fabmap_slam/KeyframeUpdate.h>
+#include <stereo_fabmap_slam/MapFile.h>
 #include <stereo_fabmap_slam/MapGraph.h>
+#include <stereo_fabmap_slam/MapLoaded.h>
 #include <stereo_fabmap_slam/RelocalizeFrame.h>
+#include <stereo_fabmap_slam/SetMode.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
+#include "stereo_fabmap_slam/map/map_file.h"
 #include "stereo_fabmap_slam/pipeline/loop_closing.h"
+#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 #include "stereo_fabmap_slam/relocalization/relocalizer.h"
 
 namespace stereo_fabmap_slam {
@@ -43,6 +52,19 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   bool OnRelocalizeFrame(stereo_fabmap_slam::RelocalizeFrame::Request& request,
                          stereo_fabmap_slam::RelocalizeFrame::Response& response);
   void OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph);
+  void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
+  bool OnSaveMap(stereo_fabmap_slam::MapFile::Request& request,
+                 stereo_fabmap_slam::MapFile::Response& response);
+  bool OnLoadMap(stereo_fabmap_slam::MapFile::Request& request,
+                 stereo_fabmap_slam::MapFile::Response& response);
+  bool OnSetMode(stereo_fabmap_slam::SetMode::Request& request,
+                 stereo_fabmap_slam::SetMode::Response& response);
+  // Loads a map file in place of the map and announces it; throws io::InputError (the map is
+  // kept) for a file that is damaged or does not fit. Call with mutex_.
+  std::size_t LoadMap(const std::string& path);
+  // The detector for a camera (made once; the first keyframe's or a loaded map's). Call with
+  // mutex_.
+  void MakeDetector(const geometry::StereoCamera& camera);
   void Work();
   // The detector needs the camera, which arrives with the first keyframe. Call with mutex_.
   place_recognition::LoopDetector& Detector(const stereo_fabmap_slam::Keyframe& message);
@@ -53,6 +75,8 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   std::optional<place_recognition::LoopDetector> detector_;
   relocalization::RelocalizerOptions relocalizer_options_;
   std::optional<relocalization::Relocalizer> relocalizer_;  // made with the detector
+  std::optional<geometry::StereoCamera> camera_;            // the map's camera
+  pipeline::SlamMode mode_ = pipeline::SlamMode::kMapping;
 
   // From the latest map_graph: map poses, and the component (keyframes joined by odometry, loop
   // and relocalization edges) of each keyframe; the map is the first keyframe's component.
@@ -61,6 +85,7 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
     std::map<std::int64_t, std::int64_t> component;  // keyframe -> its component's first id
     std::int64_t first = -1;
     Eigen::Isometry3d map_to_odom = Eigen::Isometry3d::Identity();
+    std::vector<map::SavedEdge> edges;  // loop and relocalization edges
     bool InMap(std::int64_t id) const {
       const auto it = component.find(id);
       return first >= 0 && it != component.end() && it->second == component.at(first);
@@ -69,9 +94,10 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   std::mutex map_view_mutex_;
   MapView map_view_;
 
-  ros::Subscriber keyframe_subscriber_, graph_subscriber_;
-  ros::Publisher loop_publisher_;
-  ros::ServiceServer detect_service_, relocalize_service_;
+  ros::Subscriber keyframe_subscriber_, graph_subscriber_, update_subscriber_;
+  ros::Publisher loop_publisher_, map_loaded_publisher_, mode_publisher_;
+  ros::ServiceServer detect_service_, relocalize_service_, save_service_, load_service_,
+      mode_service_;
   // relocalize_frame runs on a queue and thread of its own: the StereoTracker calls it from its
   // image callback, which must not wait for a free thread of the manager's pool.
   ros::CallbackQueue relocalize_queue_;
@@ -113,6 +139,33 @@ void LoopDetectorNodelet::onInit() {
                                     << ros_parameters::PrintedOptions(relocalizer_options_));
   ros::NodeHandle& node = getNodeHandle();
   loop_publisher_ = node.advertise<stereo_fabmap_slam::LoopEdge>("loop_edges", 100);
+  map_loaded_publisher_ = node.advertise<stereo_fabmap_slam::MapLoaded>("map_loaded", 1, true);
+  mode_publisher_ = node.advertise<std_msgs::String>("mode", 1, true);
+  save_service_ = node.advertiseService("save_map", &LoopDetectorNodelet::OnSaveMap, this);
+  load_service_ = node.advertiseService("load_map", &LoopDetectorNodelet::OnLoadMap, this);
+  mode_service_ = node.advertiseService("set_mode", &LoopDetectorNodelet::OnSetMode, this);
+  update_subscriber_ =
+      node.subscribe("keyframe_updates", 100, &LoopDetectorNodelet::OnKeyframeUpdate, this);
+  {
+    stereo_fabmap_slam::SetMode::Request mode_request;
+    stereo_fabmap_slam::SetMode::Response mode_response;
+    mode_request.mode = private_node.param<std::string>("mode", "mapping");
+    OnSetMode(mode_request, mode_response);
+    if (!mode_response.success) {
+      NODELET_FATAL_STREAM("~mode: " << mode_response.message);
+      throw std::runtime_error(mode_response.message);
+    }
+  }
+  const std::string map_file = private_node.param<std::string>("map_file", "");
+  if (!map_file.empty()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    try {
+      NODELET_INFO("map %s loaded: %zu keyframes", map_file.c_str(), LoadMap(map_file));
+    } catch (const std::exception& error) {
+      NODELET_FATAL_STREAM("~map_file: " << error.what());
+      throw;
+    }
+  }
   detect_service_ = node.advertiseService("detect_loop", &LoopDetectorNodelet::OnDetectLoop, this);
   ros::NodeHandle relocalize_node(node);
   relocalize_node.setCallbackQueue(&relocalize_queue_);
@@ -135,15 +188,24 @@ LoopDetectorNodelet::~LoopDetectorNodelet() {
   if (worker_.joinable()) worker_.join();
 }
 
+void LoopDetectorNodelet::MakeDetector(const geometry::StereoCamera& camera) {
+  if (detector_) return;
+  detector_.emplace(pipeline::LoopClosing::LoadDetector(
+      place_options_, detector_options_, camera, descriptor_.norm, descriptor_.max_match_distance));
+  relocalizer_.emplace(relocalizer_options_, camera, descriptor_.norm,
+                       descriptor_.max_match_distance);
+  camera_ = camera;
+}
+
 place_recognition::LoopDetector& LoopDetectorNodelet::Detector(
     const stereo_fabmap_slam::Keyframe& message) {
-  if (!detector_) {
-    const geometry::StereoCamera camera = ros_conversions::CameraOfKeyframe(message);
-    detector_.emplace(pipeline::LoopClosing::LoadDetector(place_options_, detector_options_, camera,
-                                                          descriptor_.norm,
-                                                          descriptor_.max_match_distance));
-    relocalizer_.emplace(relocalizer_options_, camera, descriptor_.norm,
-                         descriptor_.max_match_distance);
+  const geometry::StereoCamera camera = ros_conversions::CameraOfKeyframe(message);
+  MakeDetector(camera);
+  if (camera.size != camera_->size || std::abs(camera.fx - camera_->fx) > 1e-6 * camera_->fx ||
+      std::abs(camera.baseline - camera_->baseline) > 1e-6 * camera_->baseline) {
+    throw std::invalid_argument(
+        "the keyframe's camera differs from the map's (a map of another "
+        "camera was loaded?)");
   }
   return *detector_;
 }
@@ -164,6 +226,21 @@ void LoopDetectorNodelet::OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr&
   for (const stereo_fabmap_slam::MapGraphEdge& edge : graph->edges) {
     const auto a = static_cast<std::int64_t>(edge.from_id),
                b = static_cast<std::int64_t>(edge.to_id);
+    if (edge.type != stereo_fabmap_slam::MapGraphEdge::ODOMETRY) {
+      map::SavedEdge saved;
+      saved.edge.match_id = a;
+      saved.edge.query_id = b;
+      saved.edge.T_match_query = ros_conversions::FromPoseMessage(edge.T_from_to);
+      saved.relocalization = edge.type == stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION;
+      // Every edge of a kind has the configured uncertainty (loop_detection, relocalization).
+      saved.edge.information =
+          saved.relocalization
+              ? geometry::DiagonalPoseInformation(relocalizer_options_.translation_sigma,
+                                                  relocalizer_options_.rotation_sigma_deg)
+              : geometry::DiagonalPoseInformation(detector_options_.translation_sigma,
+                                                  detector_options_.rotation_sigma_deg);
+      view.edges.push_back(saved);
+    }
     if (parent.count(a) == 0 || parent.count(b) == 0) continue;
     const std::int64_t ra = root(a), rb = root(b);
     if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
@@ -195,6 +272,7 @@ void LoopDetectorNodelet::Work() {
     for (const stereo_fabmap_slam::KeyframeConstPtr& message : waiting) {
       try {
         std::lock_guard<std::mutex> lock(mutex_);
+        if (mode_ == pipeline::SlamMode::kLocalization) continue;  // the map is not extended
         const place_recognition::LoopDetection detection =
             Detector(*message).Process(ros_conversions::FromKeyframeMessage(*message));
         if (detection.loop) {
@@ -262,6 +340,122 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
     response.success = false;
     response.message = error.what();
   }
+  return true;
+}
+
+void LoopDetectorNodelet::OnKeyframeUpdate(
+    const stereo_fabmap_slam::KeyframeUpdateConstPtr& message) {
+  // The bundle adjustment's poses keep the odometry check of loops and the saved map current.
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!detector_) return;
+  for (std::size_t i = 0; i < message->keyframe_ids.size() && i < message->keyframe_poses.size();
+       ++i) {
+    detector_->UpdatePose(static_cast<std::int64_t>(message->keyframe_ids[i]),
+                          ros_conversions::FromPoseMessage(message->keyframe_poses[i]));
+  }
+}
+
+std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
+  const map::SavedMap saved = map::LoadMapFile(path);
+  std::optional<place_recognition::LoopDetector> fresh;
+  if (!detector_) {
+    // No keyframe yet: the map brings its camera; keyframes of another one are refused later.
+    fresh.emplace(pipeline::LoopClosing::LoadDetector(place_options_, detector_options_,
+                                                      saved.camera, descriptor_.norm,
+                                                      descriptor_.max_match_distance));
+  }
+  const place_recognition::LoopDetector& current = detector_ ? *detector_ : *fresh;
+  pipeline::LoopClosing::CheckFits(saved, current, detector_ ? *camera_ : saved.camera);
+  place_recognition::LoopDetector restored = pipeline::LoopClosing::RestoreDetector(saved, current);
+  MakeDetector(saved.camera);
+  detector_.emplace(std::move(restored));
+  stereo_fabmap_slam::MapLoaded message;
+  message.header.stamp = ros::Time::now();
+  message.path = path;
+  message.keyframes = saved.keyframes.size();
+  for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+    message.next_keyframe_id =
+        std::max<std::uint64_t>(message.next_keyframe_id, keyframe.keyframe.id + 1);
+    for (const std::int64_t point : keyframe.keyframe.map_point_ids) {
+      if (point >= 0) {
+        message.next_point_id = std::max<std::uint64_t>(message.next_point_id, point + 1);
+      }
+    }
+  }
+  map_loaded_publisher_.publish(message);
+  return saved.keyframes.size();
+}
+
+bool LoopDetectorNodelet::OnSaveMap(stereo_fabmap_slam::MapFile::Request& request,
+                                    stereo_fabmap_slam::MapFile::Response& response) {
+  MapView view;
+  {
+    std::lock_guard<std::mutex> lock(map_view_mutex_);
+    view = map_view_;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!detector_ || detector_->database().empty()) {
+    response.message = "the map is empty";
+    return true;
+  }
+  try {
+    map::SavedMap saved;
+    saved.vocabulary_fingerprint = detector_->vocabulary_fingerprint();
+    saved.camera = *camera_;
+    for (const auto& [id, stored] : detector_->database().keyframes()) {
+      const auto pose = view.poses.find(id);
+      saved.keyframes.push_back({stored.keyframe, stored.words,
+                                 pose != view.poses.end()
+                                     ? pose->second
+                                     : view.map_to_odom * stored.keyframe.T_world_camera});
+    }
+    for (const map::SavedEdge& edge : view.edges) {
+      if (detector_->database().Contains(edge.edge.match_id) &&
+          detector_->database().Contains(edge.edge.query_id)) {
+        saved.edges.push_back(edge);
+      }
+    }
+    map::SaveMapFile(request.path, saved);
+    response.success = true;
+    response.keyframes = static_cast<std::uint32_t>(saved.keyframes.size());
+    response.message = "saved " + std::to_string(saved.keyframes.size()) + " keyframes and " +
+                       std::to_string(saved.edges.size()) + " loop and relocalization edges";
+  } catch (const std::exception& error) {
+    response.message = error.what();
+  }
+  return true;
+}
+
+bool LoopDetectorNodelet::OnLoadMap(stereo_fabmap_slam::MapFile::Request& request,
+                                    stereo_fabmap_slam::MapFile::Response& response) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    response.keyframes = static_cast<std::uint32_t>(LoadMap(request.path));
+    response.success = true;
+    response.message = "loaded " + std::to_string(response.keyframes) + " keyframes";
+    NODELET_INFO("map %s loaded: %u keyframes", request.path.c_str(), response.keyframes);
+  } catch (const std::exception& error) {
+    response.message = std::string(error.what()) + "; the map is unchanged";
+  }
+  return true;
+}
+
+bool LoopDetectorNodelet::OnSetMode(stereo_fabmap_slam::SetMode::Request& request,
+                                    stereo_fabmap_slam::SetMode::Response& response) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const auto& entry : pipeline::kSlamModeNames) {
+    if (request.mode == entry.name) {
+      mode_ = entry.value;
+      std_msgs::String message;
+      message.data = entry.name;
+      mode_publisher_.publish(message);
+      response.success = true;
+      response.message = "mode " + request.mode;
+      NODELET_INFO("mode %s", entry.name);
+      return true;
+    }
+  }
+  response.message = "unknown mode '" + request.mode + "' (mapping, localization)";
   return true;
 }
 

@@ -24,7 +24,9 @@
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <std_msgs/String.h>
 #include <stereo_fabmap_slam/MapGraph.h>
+#include <stereo_fabmap_slam/MapLoaded.h>
 #include <stereo_fabmap_slam/Relocalize.h>
 #include <stereo_fabmap_slam/RelocalizeFrame.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -90,10 +92,17 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   ros::CallbackQueue service_queue_;
   std::unique_ptr<ros::AsyncSpinner> service_spinner_;
 
-  // Recovery: set by a loss while there is a map, cleared when a frame is found in it.
+  // Recovery (mapping): set by a loss while there is a map, cleared when a frame is found in it.
+  // Localization: relocalized until found, then at every keyframe; each success gives map ->
+  // odom (map_to_odom_correction, which the Backend broadcasts).
   std::atomic<bool> map_has_keyframes_{false};  // from map_graph
+  std::atomic<bool> localization_{false};       // from the LoopDetector's mode
   bool recovering_ = false;
+  bool localized_ = false;
   int frames_since_attempt_ = 0;
+  std::int64_t next_keyframe_id_ = 0, next_point_id_ = 0;  // a loaded map's, for a late front end
+  ros::Subscriber mode_subscriber_, map_loaded_subscriber_;
+  ros::Publisher correction_publisher_;
 
   // A user's relocalize request, answered by the next frame's image callback.
   struct Request {
@@ -194,6 +203,31 @@ void StereoTrackerNodelet::onInit() {
         "map_graph", 1, [this](const stereo_fabmap_slam::MapGraphConstPtr& graph) {
           map_has_keyframes_ = !graph->keyframe_ids.empty();
         });
+    mode_subscriber_ =
+        node.subscribe<std_msgs::String>("mode", 1, [this](const std_msgs::StringConstPtr& mode) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          localization_ = mode->data == "localization";
+          localized_ = false;
+          frames_since_attempt_ = 0;
+        });
+    map_loaded_subscriber_ = node.subscribe<stereo_fabmap_slam::MapLoaded>(
+        "map_loaded", 1, [this](const stereo_fabmap_slam::MapLoadedConstPtr& loaded) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          // New keyframes and points are numbered above the map's; the odometry's current
+          // piece is not in the loaded map until a relocalization finds it there.
+          if (front_end_) {
+            front_end_->SkipIdsBelow(static_cast<std::int64_t>(loaded->next_keyframe_id),
+                                     static_cast<std::int64_t>(loaded->next_point_id));
+          }
+          next_keyframe_id_ = static_cast<std::int64_t>(loaded->next_keyframe_id);
+          next_point_id_ = static_cast<std::int64_t>(loaded->next_point_id);
+          map_has_keyframes_ = loaded->keyframes > 0;
+          recovering_ = !localization_;
+          localized_ = false;
+          frames_since_attempt_ = 0;
+        });
+    correction_publisher_ =
+        node.advertise<geometry_msgs::TransformStamped>("map_to_odom_correction", 10);
     // On a queue and thread of its own: the call waits for the next frame, which the image
     // callback handles meanwhile, and must not hold a thread of the manager's pool.
     ros::NodeHandle service_node(node);
@@ -233,6 +267,7 @@ void StereoTrackerNodelet::OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& l
         options_,
         ros_conversions::RectifierFromCameraInfo(*left, *right, Eigen::Isometry3d::Identity()),
         SteadyMilliseconds);
+    front_end_->SkipIdsBelow(next_keyframe_id_, next_point_id_);
     NODELET_INFO("stereo model from camera_info: baseline %.3f m", front_end_->camera().baseline);
   } catch (const std::exception& error) {
     NODELET_WARN_THROTTLE(5, "camera_info pair unusable: %s", error.what());
@@ -324,10 +359,14 @@ void StereoTrackerNodelet::Publish(const ros::Time& stamp, const odometry::Track
 void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
                                            const pipeline::FrontEndOutput& output) {
   const odometry::TrackingResult& result = output.tracking;
+  const bool localization = localization_;
   // A new piece of odometry (after a loss, or a reset when time went backwards) is not in the
   // map until a relocalization (or a loop) joins it.
   const bool new_piece = result.keyframe && result.keyframe->starts_new_map;
-  if ((new_piece || result.state == odometry::TrackingState::kLost) && map_has_keyframes_) {
+  const bool broken = new_piece || result.state == odometry::TrackingState::kLost;
+  if (localization) {
+    if (broken) localized_ = false;  // the old map -> odom no longer holds
+  } else if (broken && map_has_keyframes_) {
     if (!recovering_) frames_since_attempt_ = 0;
     recovering_ = true;
   }
@@ -336,9 +375,15 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
     std::lock_guard<std::mutex> lock(request_mutex_);
     user_request = request_.pending && !request_.answered;
   }
-  const bool recovery_due =
-      recovering_ && frames_since_attempt_++ % relocalizer_options_.attempt_every_n_frames == 0;
-  if (!user_request && !recovery_due) return;
+  const int every = relocalizer_options_.attempt_every_n_frames;
+  bool due;
+  if (localization) {
+    due = map_has_keyframes_ &&
+          (localized_ ? result.keyframe.has_value() : frames_since_attempt_++ % every == 0);
+  } else {
+    due = recovering_ && frames_since_attempt_++ % every == 0;
+  }
+  if (!user_request && !due) return;
 
   stereo_fabmap_slam::RelocalizeFrame call;
   std::string failure;
@@ -355,8 +400,9 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
     call.request.frame =
         ros_conversions::ToKeyframeMessage(frame, front_end_->camera(), odom_frame_);
     call.request.frame.header.stamp = stamp;
-    call.request.mode = recovering_ ? stereo_fabmap_slam::RelocalizeFrame::Request::RECOVER
-                                    : stereo_fabmap_slam::RelocalizeFrame::Request::ANYWHERE;
+    const bool recover = !localization && recovering_;
+    call.request.mode = recover ? stereo_fabmap_slam::RelocalizeFrame::Request::RECOVER
+                                : stereo_fabmap_slam::RelocalizeFrame::Request::ANYWHERE;
     call.request.reference_keyframe_id = result.reference_keyframe;
     call.request.T_reference_camera = ros_conversions::ToPoseMessage(result.T_keyframe_camera);
     bool reanchor;
@@ -364,15 +410,35 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
       std::lock_guard<std::mutex> lock(request_mutex_);
       reanchor = user_request && request_.reanchor;
     }
-    // After a loss the edge is what joins the odometry to the map; while tracking is fine it
-    // corrects map -> odom only when the user asks to re-anchor.
-    call.request.add_edge = recovering_ || reanchor;
+    // Mapping: after a loss the edge is what joins the odometry to the map; while tracking is
+    // fine it corrects map -> odom only when the user asks to re-anchor. Localization never
+    // changes the map: the result moves map -> odom instead.
+    call.request.add_edge = !localization && (recover || reanchor);
     if (!relocalize_frame_client_.isValid()) {
       relocalize_frame_client_ = getNodeHandle().serviceClient<stereo_fabmap_slam::RelocalizeFrame>(
           "relocalize_frame", true);
     }
     if (!relocalize_frame_client_.call(call)) {
       failure = "the LoopDetector's relocalize_frame service is not available";
+    } else if (localization) {
+      if (call.response.success && call.response.map_pose_known) {
+        const Eigen::Isometry3d T_map_odom =
+            ros_conversions::FromPoseMessage(call.response.T_map_camera) *
+            result.T_world_camera.inverse();
+        geometry_msgs::TransformStamped correction;
+        correction.header.stamp = stamp;
+        correction.header.frame_id = map_frame_;
+        correction.child_frame_id = odom_frame_;
+        correction.transform = ros_conversions::ToTransformMessage(T_map_odom);
+        correction_publisher_.publish(correction);
+        if (!localized_) {
+          NODELET_INFO("localized in the map against keyframe %lu (%d inliers)",
+                       static_cast<unsigned long>(call.response.keyframe_id),
+                       call.response.inliers);
+        }
+        localized_ = true;
+        frames_since_attempt_ = 0;
+      }
     } else if (recovering_ && (call.response.success || call.response.already_joined)) {
       recovering_ = false;
       if (call.response.success) {

@@ -86,7 +86,19 @@ map::SavedMap LoopClosing::Save(const geometry::StereoCamera& camera) const {
 }
 
 void LoopClosing::Load(const map::SavedMap& saved, const geometry::StereoCamera& camera) {
-  if (saved.vocabulary_fingerprint != detector_.vocabulary_fingerprint()) {
+  CheckFits(saved, detector_, camera);
+  // Built aside and swapped in, so that a failure leaves the running map as it was.
+  place_recognition::LoopDetector detector = RestoreDetector(saved, detector_);
+  backend::PoseGraph graph = RestorePoseGraph(saved, pose_graph_options_);
+  detector_ = std::move(detector);
+  pose_graph_ = std::move(graph);
+  next_starts_new_map_ = true;
+}
+
+void LoopClosing::CheckFits(const map::SavedMap& saved,
+                            const place_recognition::LoopDetector& detector,
+                            const geometry::StereoCamera& camera) {
+  if (saved.vocabulary_fingerprint != detector.vocabulary_fingerprint()) {
     throw io::InputError(
         "the map was made with another vocabulary (its words would mean other things here)");
   }
@@ -102,14 +114,28 @@ void LoopClosing::Load(const map::SavedMap& saved, const geometry::StereoCamera&
                   camera.size.height, camera.fx, camera.baseline);
     throw io::InputError(text);
   }
-  // Built aside and swapped in, so that a failure leaves the running map as it was.
-  place_recognition::LoopDetector detector = detector_.WithoutKeyframes();
-  backend::PoseGraph graph(pose_graph_options_);
+}
+
+place_recognition::LoopDetector LoopClosing::RestoreDetector(
+    const map::SavedMap& saved, const place_recognition::LoopDetector& detector) {
+  place_recognition::LoopDetector restored = detector.WithoutKeyframes();
+  try {
+    for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+      restored.Add(keyframe.keyframe, keyframe.words);
+    }
+  } catch (const std::invalid_argument& error) {
+    throw io::InputError(std::string("the map is inconsistent: ") + error.what());
+  }
+  return restored;
+}
+
+backend::PoseGraph LoopClosing::RestorePoseGraph(const map::SavedMap& saved,
+                                                 const backend::PoseGraphOptions& options) {
+  backend::PoseGraph graph(options);
   try {
     for (const map::SavedKeyframe& keyframe : saved.keyframes) {
       graph.AddKeyframe(keyframe.keyframe.id, keyframe.keyframe.T_world_camera,
                         keyframe.keyframe.starts_new_map);
-      detector.Add(keyframe.keyframe, keyframe.words);
     }
     for (const map::SavedEdge& edge : saved.edges) {
       graph.AddLoop(edge.edge, edge.relocalization ? backend::PoseGraphEdgeType::kRelocalization
@@ -121,9 +147,7 @@ void LoopClosing::Load(const map::SavedMap& saved, const geometry::StereoCamera&
   } catch (const std::invalid_argument& error) {
     throw io::InputError(std::string("the map is inconsistent: ") + error.what());
   }
-  detector_ = std::move(detector);
-  pose_graph_ = std::move(graph);
-  next_starts_new_map_ = true;
+  return graph;
 }
 
 double LoopClosing::AddRelocalization(const map::LoopEdge& edge) {

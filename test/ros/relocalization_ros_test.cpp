@@ -4,22 +4,30 @@
 // - after the jump, the tracker's recovery joins the new piece of odometry to the map (a
 //   RELOCALIZATION edge in map_graph), and a relocalize call succeeds with a pose close to
 //   ground truth;
-// - after the bag ended, relocalize times out: no images.
+// - after the bag ended, relocalize times out: no images;
+// - save_map writes the map; load_map refuses a damaged file and loads the saved one; in
+//   localization mode a replay of the bag's start is found in the loaded map (pose against
+//   ground truth, map -> odom corrections) and adds no keyframe.
 #include <sys/wait.h>
 
 #include <atomic>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <mutex>
 #include <string>
+#include <thread>
 
+#include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <stereo_fabmap_slam/MapFile.h>
 #include <stereo_fabmap_slam/MapGraph.h>
 #include <stereo_fabmap_slam/Relocalize.h>
+#include <stereo_fabmap_slam/SetMode.h>
 
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/camera/camera_options.h"
@@ -65,7 +73,8 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
 
   std::mutex mutex;
   double first_stamp = -1, last_stamp = -1;
-  int relocalization_edges = 0;
+  int relocalization_edges = 0, corrections = 0;
+  std::size_t graph_keyframes = 0;
   ros::NodeHandle node;
   const ros::Subscriber odometry_subscriber = node.subscribe<nav_msgs::Odometry>(
       "/odometry", 100, [&](const nav_msgs::OdometryConstPtr& message) {
@@ -81,6 +90,12 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
           count += edge.type == stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION ? 1 : 0;
         }
         relocalization_edges = std::max(relocalization_edges, count);
+        graph_keyframes = message->keyframe_ids.size();
+      });
+  const ros::Subscriber correction_subscriber = node.subscribe<geometry_msgs::TransformStamped>(
+      "/map_to_odom_correction", 100, [&](const geometry_msgs::TransformStampedConstPtr&) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++corrections;
       });
   ros::AsyncSpinner spinner(2);
   spinner.start();
@@ -114,6 +129,12 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
     ros::WallDuration(0.1).sleep();
   }
   ASSERT_GE(bag_time(), kCut + 3.0) << ReadTextFile(temp.path() + "/roslaunch.log");
+  // A relocalized pose against ground truth: the map frame is the camera at the first frame.
+  const auto pose_error = [&](const geometry_msgs::PoseStamped& pose) {
+    const Eigen::Isometry3d expected =
+        PoseAt(truth, truth.front().timestamp).inverse() * PoseAt(truth, pose.header.stamp.toSec());
+    return expected.inverse() * ros_conversions::FromPoseMessage(pose.pose);
+  };
   stereo_fabmap_slam::Relocalize after_jump;
   after_jump.request.timeout = 2.0;
   ASSERT_TRUE(client.call(after_jump));
@@ -121,11 +142,7 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   if (after_jump.response.success) {
     EXPECT_EQ(after_jump.response.pose.header.frame_id, "map");
     EXPECT_GE(after_jump.response.inliers, 50);
-    const double time = after_jump.response.pose.header.stamp.toSec();
-    const Eigen::Isometry3d expected =
-        PoseAt(truth, truth.front().timestamp).inverse() * PoseAt(truth, time);
-    const Eigen::Isometry3d error =
-        expected.inverse() * ros_conversions::FromPoseMessage(after_jump.response.pose.pose);
+    const Eigen::Isometry3d error = pose_error(after_jump.response.pose);
     RecordProperty("pose_error_m", std::to_string(error.translation().norm()));
     RecordProperty("time_ms", std::to_string(after_jump.response.time_ms));
     // The map's own drift over the 24 s before the jump (odometry ~1 % of 20 m, partly undone
@@ -145,6 +162,77 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   EXPECT_FALSE(no_images.response.success);
   EXPECT_NE(no_images.response.message.find("no stereo images"), std::string::npos)
       << no_images.response.message;
+
+  // Save the map, refuse a damaged copy, load the saved one, use it in localization mode.
+  ros::ServiceClient save = node.serviceClient<stereo_fabmap_slam::MapFile>("/save_map");
+  ros::ServiceClient load = node.serviceClient<stereo_fabmap_slam::MapFile>("/load_map");
+  ros::ServiceClient set_mode = node.serviceClient<stereo_fabmap_slam::SetMode>("/set_mode");
+  stereo_fabmap_slam::MapFile saved;
+  saved.request.path = temp.path() + "/kidnap.map";
+  ASSERT_TRUE(save.call(saved));
+  EXPECT_TRUE(saved.response.success) << saved.response.message;
+  EXPECT_GT(saved.response.keyframes, 50u);
+  const std::string bytes = ReadTextFile(saved.request.path);
+  {
+    std::FILE* file = std::fopen((temp.path() + "/truncated.map").c_str(), "wb");
+    ASSERT_NE(file, nullptr);
+    std::fwrite(bytes.data(), 1, bytes.size() / 2, file);
+    std::fclose(file);
+  }
+  stereo_fabmap_slam::MapFile damaged;
+  damaged.request.path = temp.path() + "/truncated.map";
+  ASSERT_TRUE(load.call(damaged));
+  EXPECT_FALSE(damaged.response.success);
+  EXPECT_NE(damaged.response.message.find("unchanged"), std::string::npos)
+      << damaged.response.message;
+  stereo_fabmap_slam::MapFile loaded;
+  loaded.request.path = saved.request.path;
+  ASSERT_TRUE(load.call(loaded));
+  EXPECT_TRUE(loaded.response.success) << loaded.response.message;
+  EXPECT_EQ(loaded.response.keyframes, saved.response.keyframes);
+  stereo_fabmap_slam::SetMode localization;
+  localization.request.mode = "localization";
+  ASSERT_TRUE(set_mode.call(localization));
+  EXPECT_TRUE(localization.response.success) << localization.response.message;
+  stereo_fabmap_slam::SetMode unknown_mode;
+  unknown_mode.request.mode = "exploring";
+  ASSERT_TRUE(set_mode.call(unknown_mode));
+  EXPECT_FALSE(unknown_mode.response.success);
+  ros::WallDuration(2.0).sleep();  // the Backend rebuilds its graph from the file
+  std::size_t keyframes_loaded;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    keyframes_loaded = graph_keyframes;
+  }
+  EXPECT_EQ(keyframes_loaded, saved.response.keyframes);
+
+  // A replay of the bag's first 12 s (time goes back: the tracker starts afresh), with a
+  // relocalize call in its middle.
+  stereo_fabmap_slam::Relocalize replayed;
+  bool replay_called = false;
+  std::thread replay_caller([&] {
+    ros::WallDuration(6.0).sleep();
+    replayed.request.timeout = 2.0;
+    replay_called = client.call(replayed);
+  });
+  EXPECT_EQ(std::system(("rosbag play --clock --quiet -u 12 " + sequence + "/sequence.bag > " +
+                         temp.path() + "/replay.log 2>&1")
+                            .c_str()),
+            0);
+  replay_caller.join();
+  ros::WallDuration(1.0).sleep();
+  ASSERT_TRUE(replay_called);
+  EXPECT_TRUE(replayed.response.success) << replayed.response.message;
+  if (replayed.response.success) {
+    const Eigen::Isometry3d error = pose_error(replayed.response.pose);
+    RecordProperty("localization_pose_error_m", std::to_string(error.translation().norm()));
+    EXPECT_LT(error.translation().norm(), 0.10);
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_GT(corrections, 0);                     // map -> odom from relocalizations
+    EXPECT_EQ(graph_keyframes, keyframes_loaded);  // localization adds no keyframe
+  }
 
   kill(launch_pid, SIGINT);
   for (int i = 0; i < 150 && kill(launch_pid, 0) == 0; ++i) ros::WallDuration(0.1).sleep();

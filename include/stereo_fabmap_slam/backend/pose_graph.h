@@ -80,6 +80,7 @@ class PoseGraph {
   // Odometry edges (from the latest odometry poses), then loop edges (from: match, to: query).
   std::vector<PoseGraphEdge> Edges() const;
   std::size_t size() const { return keyframes_.size(); }
+  std::int64_t last_id() const { return keyframes_.empty() ? -1 : keyframes_.back().id; }
 
  private:
   struct Keyframe {

@@ -57,6 +57,15 @@ class LoopClosing {
   // keyframe added starts a new piece of odometry (the saved map's odom is another run's).
   void Load(const map::SavedMap& saved, const geometry::StereoCamera& camera);
 
+  // The parts of Load, for the nodelets that keep them apart (LoopDetector, Backend). Each
+  // throws io::InputError for a map that does not fit or is inconsistent.
+  static void CheckFits(const map::SavedMap& saved, const place_recognition::LoopDetector& detector,
+                        const geometry::StereoCamera& camera);
+  static place_recognition::LoopDetector RestoreDetector(
+      const map::SavedMap& saved, const place_recognition::LoopDetector& detector);
+  static backend::PoseGraph RestorePoseGraph(const map::SavedMap& saved,
+                                             const backend::PoseGraphOptions& options);
+
   const backend::PoseGraph& pose_graph() const { return pose_graph_; }
   const place_recognition::LoopDetector& detector() const { return detector_; }
   bool empty() const { return pose_graph_.size() == 0; }
