@@ -13,6 +13,7 @@ BIN=build/bin
 OUT=output/demo
 RATE=${DEMO_RATE:-1}
 mkdir -p "$OUT"
+rm -f "$OUT/relocalize.txt" "$OUT/relocalization.txt"
 SECONDS=0
 if [ -n "${DEMO_SEQUENCE:-}" ]; then
   SEQUENCE=$DEMO_SEQUENCE
@@ -46,8 +47,12 @@ port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1
 export ROS_MASTER_URI=http://127.0.0.1:$port ROS_HOME=$PWD/$OUT/ros
 roscore -p "$port" > "$OUT/roscore.log" 2>&1 &
 roscore_pid=$!
-cleanup() { kill "$recorder_pid" 2> /dev/null || true; kill "$roscore_pid" 2> /dev/null || true; wait 2> /dev/null || true; }
+cleanup() {
+  kill "$recorder_pid" 2> /dev/null || true; kill -INT "$launch_pid" 2> /dev/null || true
+  kill "$roscore_pid" 2> /dev/null || true; wait 2> /dev/null || true
+}
 recorder_pid=
+launch_pid=
 trap cleanup EXIT
 until rosparam list > /dev/null 2>&1; do sleep 0.2; done
 
@@ -58,13 +63,40 @@ recorder_pid=$!
 sleep 1
 graph_start=$SECONDS
 if [ "${RVIZ:-0}" = 1 ]; then rviz -d config/stereo_fabmap_slam.rviz > "$OUT/rviz.log" 2>&1 & fi
+# The graph stays up after the bag (exit_at_end:=false) for the relocalize call below.
 roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$RATE" calibration:="$calibration" \
-  > "$OUT/roslaunch.log" 2>&1 || {
-  echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
+  exit_at_end:=false > "$OUT/roslaunch.log" 2>&1 &
+launch_pid=$!
+duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
+deadline=$((SECONDS + 60 + 3 * duration))
+until rosnode list 2> /dev/null | grep -q '^/bag_player$'; do
+  kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
+    echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
+  sleep 0.5
+done
+# The player is gone when three queries in a row (1.5 s) do not list it: a busy master can
+# miss one.
+missing=0
+while [ $missing -lt 3 ]; do
+  kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
+    echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
+  if rosnode list 2> /dev/null | grep -q '^/bag_player$'; then missing=0; else missing=$((missing + 1)); fi
+  sleep 0.5
+done
 graph_seconds=$((SECONDS - graph_start))
 sleep 1
 kill -INT "$recorder_pid"; wait "$recorder_pid" 2> /dev/null || true
 recorder_pid=
+
+# Relocalization through the graph: the bag's first 4 s again (the tracker sees time go back
+# and starts afresh) while the relocalize service finds the camera in the map.
+echo "== relocalize: replaying the first 4 s and calling the relocalize service"
+(sleep 2; rosservice call /relocalize "{timeout: 3.0, reanchor: false}" > "$OUT/relocalize.txt" 2>&1) &
+caller_pid=$!
+rosbag play --clock --quiet -u 4 "$bag" > /dev/null 2>&1
+wait "$caller_pid" || true
+kill -INT "$launch_pid" 2> /dev/null || true
+wait "$launch_pid" 2> /dev/null || true
 
 echo "== evaluating against ground truth"
 /usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/odometry.txt" \
@@ -86,6 +118,33 @@ first_loop=$(awk '!/^#/ {print $1; exit}' "$OUT/loops.txt")
 start=$(awk '!/^#/ {print $1; exit}' "$OUT/odometry.txt")
 ate=$(awk '/^ATE/ {print $3}' "$OUT/evaluation.txt")
 ate_odometry=$(awk '/^ATE/ {print $3}' "$OUT/evaluation_odometry.txt")
+# The relocalized pose in TUM, measured with the map trajectory's alignment to ground truth.
+relocalization=$(/usr/bin/python3 - "$OUT/relocalize.txt" "$OUT/relocalization.txt" <<'PYTHON'
+import sys, yaml
+try:
+    answer = yaml.safe_load(open(sys.argv[1]))
+except Exception:
+    answer = None
+if not isinstance(answer, dict):
+    print("failed: " + open(sys.argv[1]).read().strip().replace("\n", " ")[:120])
+    sys.exit()
+if not answer["success"]:
+    print("failed: " + answer["message"])
+    sys.exit()
+pose = answer["pose"]
+stamp = pose["header"]["stamp"]["secs"] + 1e-9 * pose["header"]["stamp"]["nsecs"]
+p, q = pose["pose"]["position"], pose["pose"]["orientation"]
+with open(sys.argv[2], "w") as out:
+    out.write(f"{stamp:.9f} {p['x']} {p['y']} {p['z']} {q['x']} {q['y']} {q['z']} {q['w']}\n")
+print(f"found against keyframe {answer['keyframe_id']} ({answer['inliers']} inliers, "
+      f"{answer['time_ms']:.1f} ms)")
+PYTHON
+)
+if [ -f "$OUT/relocalization.txt" ] && [ "${relocalization#found}" != "$relocalization" ]; then
+  error=$("$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/trajectory.txt" --poses "$OUT/relocalization.txt" \
+    | awk '/^pose/ {printf "%.2f cm, %.2f deg", 100 * $3, $5}')
+  relocalization="$relocalization, error ${error} against ground truth"
+fi
 echo
 echo "demo summary ($NAME)"
 echo "  frames played           $frames"
@@ -95,7 +154,7 @@ echo "  loop edges accepted     ${loop_edges:-0}${first_loop:+ (first at $(awk -
 echo "  revisits present        $loops_present"
 echo "  ATE RMSE odometry       $ate_odometry cm"
 echo "  ATE RMSE loop-closed    $ate cm"
-echo "  relocalization          - (not built yet)"
+echo "  relocalization          $relocalization"
 echo "  ROS graph run time      ${graph_seconds} s (bag of $(rosbag info -y -k duration "$bag" | cut -c1-5) s at rate $RATE)"
-echo "  files                   $OUT/trajectory.txt, odometry.txt, keyframes.txt, loops.txt, trajectory.png, evaluation.txt"
+echo "  files                   $OUT/trajectory.txt, odometry.txt, keyframes.txt, loops.txt, trajectory.png, evaluation.txt, relocalize.txt"
 echo "== demo done in ${SECONDS} s"

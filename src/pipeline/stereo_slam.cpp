@@ -161,7 +161,7 @@ RelocalizationOutput StereoSlam::Relocalize(const cv::Mat& left_raw,
   const double extract_ms = clock_() - start;
   RelocalizationOutput relocalized = relocalization_->Process(
       features, descriptors, *loop_closing_, [](const map::StoredKeyframe&) { return true; });
-  relocalized.ms += extract_ms;
+  relocalized.extraction_ms = extract_ms;
   return relocalized;
 }
 

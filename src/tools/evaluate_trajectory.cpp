@@ -1,4 +1,6 @@
 // Compares an estimated trajectory with ground truth: ATE (evo_ape -a convention) and RPE.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <optional>
@@ -27,7 +29,9 @@ constexpr char kUsage[] =
     "then RMSE/mean/median/max of the position differences, as evo_ape -a.\n"
     "RPE: for every matched pose i and the pose j --rpe-delta later (default 1 frame), the\n"
     "translation norm and angle of (GT_i^-1 GT_j)^-1 (EST_i^-1 EST_j).\n"
-    "--loops FILE: lines 'query_time match_time' (loop edges), drawn in the plot.\n";
+    "--loops FILE: lines 'query_time match_time' (loop edges), drawn in the plot.\n"
+    "--poses FILE: more poses in the estimate's frame (e.g. relocalizations, TUM), measured\n"
+    "with the estimate's alignment: one line each, 'pose T: E m, A deg' (not with --json).\n";
 
 void PrintStatsRow(const char* name, const evaluation::ErrorStatistics& s, double unit_scale) {
   std::printf("%-16s %10.4f %10.4f %10.4f %10.4f %8zu\n", name, s.rmse * unit_scale,
@@ -114,7 +118,7 @@ int main(int argc, char** argv) {
   try {
     args.emplace(argc, argv,
                  std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "plot",
-                                       "rpe-delta", "rpe-unit", "keyframes", "loops"},
+                                       "rpe-delta", "rpe-unit", "keyframes", "loops", "poses"},
                  std::set<std::string>{"json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -122,6 +126,9 @@ int main(int argc, char** argv) {
     }
     if (!args->Value("gt") || !args->Value("est") || !args->positional().empty()) {
       throw std::invalid_argument("--gt and --est are required");
+    }
+    if (args->Value("poses") && args->Flag("json")) {
+      throw std::invalid_argument("--poses prints a table: leave out --json");
     }
     gt_path = *args->Value("gt");
     est_path = *args->Value("est");
@@ -153,6 +160,27 @@ int main(int argc, char** argv) {
       PrintJson(result, options);
     } else {
       PrintTable(result, options, gt_path, est_path);
+    }
+    if (const auto poses_path = args->Value("poses")) {
+      // Each pose against the ground truth nearest in time, after the estimate's alignment.
+      for (const auto& pose : evaluation::ReadTrajectory(*poses_path)) {
+        const auto nearest = std::min_element(ground_truth.begin(), ground_truth.end(),
+                                              [&](const auto& a, const auto& b) {
+                                                return std::abs(a.timestamp - pose.timestamp) <
+                                                       std::abs(b.timestamp - pose.timestamp);
+                                              });
+        if (nearest == ground_truth.end() ||
+            std::abs(nearest->timestamp - pose.timestamp) > options.max_dt) {
+          std::printf("pose %.6f: no ground truth within %.3f s\n", pose.timestamp, options.max_dt);
+          continue;
+        }
+        const Eigen::Isometry3d aligned = result.alignment.Apply(pose.pose);
+        const double angle =
+            Eigen::AngleAxisd(nearest->pose.linear().transpose() * aligned.linear()).angle();
+        std::printf("pose %.6f: %.4f m, %.3f deg\n", pose.timestamp,
+                    (aligned.translation() - nearest->pose.translation()).norm(),
+                    angle * 180.0 / M_PI);
+      }
     }
     if (const auto plot_path = args->Value("plot")) {
       const auto keyframes_path = args->Value("keyframes");

@@ -18,6 +18,8 @@ struct RelocalizationOutput {
   // meaningful on success.
   Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
   double ms = 0;  // place words, candidates, verification
+  // Feature extraction when the frame was not tracked (StereoSlam::Relocalize); 0 otherwise.
+  double extraction_ms = 0;
 };
 
 // The relocalization stage: one frame's stereo features and place descriptors against the map
