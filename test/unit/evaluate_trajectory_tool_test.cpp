@@ -1,6 +1,7 @@
 // The evaluate_trajectory program, run as a user runs it.
 #include <regex>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -98,6 +99,33 @@ TEST_F(EvaluateTrajectoryTool, TableAndPlot) {
   const cv::Mat image = cv::imread(plot);
   ASSERT_FALSE(image.empty());
   EXPECT_EQ(image.size(), cv::Size(900, 700));
+}
+
+TEST_F(EvaluateTrajectoryTool, ExtraPosesAreMeasuredWithTheEstimatesAlignment) {
+  // Two poses in the estimate's frame (20 cm off like it): one true, one 10 cm further off.
+  evaluation::Trajectory poses = {estimate_[50], estimate_[120]};
+  poses[1].pose.translation() += Eigen::Vector3d(0.0, 0.1, 0.0);
+  const std::string path = temp_.path() + "/poses.txt";
+  evaluation::WriteTumTrajectory(poses, path);
+  int status = -1;
+  const std::string table = Run("--gt " + gt_path_ + " --est " + est_path_ + " --gt-to-camera " +
+                                    sensor_yaml_ + " --poses " + path,
+                                &status);
+  ASSERT_EQ(status, 0) << table;
+  const std::regex line("pose [0-9.]+: ([0-9.]+) m, ([0-9.]+) deg");
+  std::vector<double> errors;
+  for (std::sregex_iterator it(table.begin(), table.end(), line), end; it != end; ++it) {
+    errors.push_back(std::stod((*it)[1]));
+  }
+  ASSERT_EQ(errors.size(), 2u) << table;
+  // The estimate is the truth shifted rigidly, so the alignment is exact to the stamps' offset
+  // (ground truth at 200 Hz, nearest sample): a few millimetres at most.
+  EXPECT_LT(errors[0], 0.005);
+  EXPECT_NEAR(errors[1], 0.1, 0.005);
+  const std::string refused =
+      Run("--gt " + gt_path_ + " --est " + est_path_ + " --poses " + path + " --json", &status);
+  EXPECT_EQ(status, 2);
+  EXPECT_NE(refused.find("--poses prints a table"), std::string::npos) << refused;
 }
 
 TEST_F(EvaluateTrajectoryTool, BadArgumentsAndFiles) {
