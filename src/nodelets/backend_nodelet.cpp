@@ -68,8 +68,9 @@ class BackendNodelet : public nodelet::Nodelet {
   // them together and skips the optimisations in between (see Work()).
   std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
   std::deque<Edge> loop_queue_;
-  std::optional<std::string> map_to_load_;  // a loaded map's file, for the worker
-  std::atomic<bool> localization_{false};   // localization mode: the graph is not extended
+  std::optional<std::string> map_to_load_;    // a loaded map's file, for the worker
+  std::atomic<bool> localization_{false};     // localization mode: the graph is not extended
+  std::atomic<bool> mapping_resumed_{false};  // set when localization mode ends
   bool stopping_ = false;
   std::thread worker_;
 
@@ -146,7 +147,11 @@ void BackendNodelet::OnMapLoaded(const stereo_fabmap_slam::MapLoadedConstPtr& me
 }
 
 void BackendNodelet::OnMode(const std_msgs::StringConstPtr& message) {
-  localization_ = message->data == "localization";
+  const bool localization = message->data == "localization";
+  // Back to mapping: the keyframes of the localization time were not added, and a loss among
+  // them is unknown here, so the next keyframe starts a new piece of odometry.
+  if (localization_ && !localization) mapping_resumed_ = true;
+  localization_ = localization;
 }
 
 void BackendNodelet::OnCorrection(const geometry_msgs::TransformStampedConstPtr& message) {
@@ -172,6 +177,9 @@ void BackendNodelet::Work() {
   backend::PoseGraph graph(pose_graph_options_);
   std::deque<Edge> pending_loops;    // their keyframes have not arrived yet
   bool next_starts_new_map = false;  // after a load: this run's odometry is a new piece
+  // Keyframes below this id are a loaded map's: this run's bundle adjustment never moves them,
+  // and a keyframe of this run with such an id was made before the load.
+  std::int64_t loaded_below = 0;
   while (true) {
     std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
     std::optional<std::string> load;
@@ -189,10 +197,14 @@ void BackendNodelet::Work() {
     if (load) {
       // The LoopDetector checked the file; the graph is rebuilt from the same file.
       try {
-        graph =
-            pipeline::LoopClosing::RestorePoseGraph(map::LoadMapFile(*load), pose_graph_options_);
+        const map::SavedMap saved = map::LoadMapFile(*load);
+        graph = pipeline::LoopClosing::RestorePoseGraph(saved, pose_graph_options_);
         pending_loops.clear();
         next_starts_new_map = true;
+        adjuster.reset();  // this run's window, with ids the map may use too, starts afresh
+        for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+          loaded_below = std::max(loaded_below, keyframe.keyframe.id + 1);
+        }
         NODELET_INFO("pose graph of %s: %zu keyframes", load->c_str(), graph.size());
       } catch (const std::exception& error) {
         NODELET_ERROR("map %s not loaded into the pose graph: %s", load->c_str(), error.what());
@@ -216,16 +228,18 @@ void BackendNodelet::Work() {
           adjuster = std::make_unique<backend::LocalBundleAdjuster>(
               options_, ros_conversions::CameraOfKeyframe(*message));
         }
+        if (static_cast<std::int64_t>(message->id) < loaded_below) continue;  // before a load
         const map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
         const map::KeyframeUpdate update = adjuster->AddKeyframe(keyframe, optimise);
         // Keyframes made before a map was loaded (ids below the map's) stay out of its graph.
+        if (mapping_resumed_.exchange(false)) next_starts_new_map = true;
         if (!localization_ && keyframe.id > graph.last_id()) {
           graph.AddKeyframe(keyframe.id, keyframe.T_world_camera,
                             keyframe.starts_new_map || next_starts_new_map);
           next_starts_new_map = false;
         }
         for (const auto& [id, pose] : update.keyframe_poses) {
-          if (graph.Contains(id)) graph.UpdateOdometryPose(id, pose);
+          if (id >= loaded_below && graph.Contains(id)) graph.UpdateOdometryPose(id, pose);
         }
         stamp = message->header.stamp;
         if (!optimise) continue;

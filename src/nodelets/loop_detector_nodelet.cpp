@@ -31,6 +31,7 @@
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
+#include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/map/map_file.h"
@@ -76,7 +77,15 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   relocalization::RelocalizerOptions relocalizer_options_;
   std::optional<relocalization::Relocalizer> relocalizer_;  // made with the detector
   std::optional<geometry::StereoCamera> camera_;            // the map's camera
+  backend::PoseGraphOptions pose_graph_options_;  // to check a map's graph before loading it
   pipeline::SlamMode mode_ = pipeline::SlamMode::kMapping;
+  // The next keyframe added starts a new piece of odometry: after a load (the map's odometry is
+  // another run's) and after localization mode (its keyframes were not added, a loss among
+  // them is unknown here).
+  bool next_starts_new_map_ = false;
+  // Keyframes below this id belong to a loaded map: this run's bundle adjustment never moves
+  // them, and an update or keyframe of this run with such an id is from before the load.
+  std::int64_t loaded_below_ = 0;
 
   // From the latest map_graph: map poses, and the component (keyframes joined by odometry, loop
   // and relocalization edges) of each keyframe; the map is the first keyframe's component.
@@ -91,6 +100,12 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
       return first >= 0 && it != component.end() && it->second == component.at(first);
     }
   };
+  // Builds a view from keyframe ids with map poses, the joins between them (odometry, loop and
+  // relocalization edges) and the loop and relocalization edges to save.
+  MapView MakeMapView(const std::vector<std::pair<std::int64_t, Eigen::Isometry3d>>& poses,
+                      const std::vector<std::pair<std::int64_t, std::int64_t>>& joins,
+                      std::vector<map::SavedEdge> edges,
+                      const Eigen::Isometry3d& map_to_odom) const;
   std::mutex map_view_mutex_;
   MapView map_view_;
 
@@ -127,6 +142,7 @@ void LoopDetectorNodelet::onInit() {
         place_recognition::LoadPlaceRecognitionOptions(fabmap_config, odometry_features);
     detector_options_ = ros_parameters::ReadModuleOptions(private_node, detector_options_);
     relocalizer_options_ = ros_parameters::ReadModuleOptions(private_node, relocalizer_options_);
+    pose_graph_options_ = ros_parameters::ReadModuleOptions(private_node, pose_graph_options_);
     // Load the vocabulary once now, so that a missing or damaged file stops start-up.
     place_recognition::Vocabulary::Load(place_options_.vocabulary_directory + "/vocabulary.bin");
   } catch (const std::exception& error) {
@@ -210,44 +226,62 @@ place_recognition::LoopDetector& LoopDetectorNodelet::Detector(
   return *detector_;
 }
 
-void LoopDetectorNodelet::OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph) {
+LoopDetectorNodelet::MapView LoopDetectorNodelet::MakeMapView(
+    const std::vector<std::pair<std::int64_t, Eigen::Isometry3d>>& poses,
+    const std::vector<std::pair<std::int64_t, std::int64_t>>& joins,
+    std::vector<map::SavedEdge> edges, const Eigen::Isometry3d& map_to_odom) const {
   MapView view;
-  // Union-find over the graph's edges; each component is named by its smallest id.
+  // Union-find over the joins; each component is named by its smallest id.
   std::map<std::int64_t, std::int64_t> parent;
   const std::function<std::int64_t(std::int64_t)> root = [&](std::int64_t id) {
     while (parent[id] != id) id = parent[id] = parent[parent[id]];
     return id;
   };
-  for (std::size_t i = 0; i < graph->keyframe_ids.size(); ++i) {
-    const auto id = static_cast<std::int64_t>(graph->keyframe_ids[i]);
+  for (const auto& [id, pose] : poses) {
     parent[id] = id;
-    view.poses[id] = ros_conversions::FromPoseMessage(graph->keyframe_poses[i]);
+    view.poses[id] = pose;
   }
-  for (const stereo_fabmap_slam::MapGraphEdge& edge : graph->edges) {
-    const auto a = static_cast<std::int64_t>(edge.from_id),
-               b = static_cast<std::int64_t>(edge.to_id);
-    if (edge.type != stereo_fabmap_slam::MapGraphEdge::ODOMETRY) {
-      map::SavedEdge saved;
-      saved.edge.match_id = a;
-      saved.edge.query_id = b;
-      saved.edge.T_match_query = ros_conversions::FromPoseMessage(edge.T_from_to);
-      saved.relocalization = edge.type == stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION;
-      // Every edge of a kind has the configured uncertainty (loop_detection, relocalization).
-      saved.edge.information =
-          saved.relocalization
-              ? geometry::DiagonalPoseInformation(relocalizer_options_.translation_sigma,
-                                                  relocalizer_options_.rotation_sigma_deg)
-              : geometry::DiagonalPoseInformation(detector_options_.translation_sigma,
-                                                  detector_options_.rotation_sigma_deg);
-      view.edges.push_back(saved);
-    }
+  for (const auto& [a, b] : joins) {
     if (parent.count(a) == 0 || parent.count(b) == 0) continue;
     const std::int64_t ra = root(a), rb = root(b);
     if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
   }
   for (const auto& entry : parent) view.component[entry.first] = root(entry.first);
   if (!view.poses.empty()) view.first = view.poses.begin()->first;
-  view.map_to_odom = ros_conversions::FromTransformMessage(graph->map_to_odom);
+  view.map_to_odom = map_to_odom;
+  view.edges = std::move(edges);
+  return view;
+}
+
+void LoopDetectorNodelet::OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph) {
+  std::vector<std::pair<std::int64_t, Eigen::Isometry3d>> poses;
+  for (std::size_t i = 0; i < graph->keyframe_ids.size() && i < graph->keyframe_poses.size(); ++i) {
+    poses.emplace_back(static_cast<std::int64_t>(graph->keyframe_ids[i]),
+                       ros_conversions::FromPoseMessage(graph->keyframe_poses[i]));
+  }
+  std::vector<std::pair<std::int64_t, std::int64_t>> joins;
+  std::vector<map::SavedEdge> edges;
+  for (const stereo_fabmap_slam::MapGraphEdge& edge : graph->edges) {
+    const auto a = static_cast<std::int64_t>(edge.from_id),
+               b = static_cast<std::int64_t>(edge.to_id);
+    joins.emplace_back(a, b);
+    if (edge.type == stereo_fabmap_slam::MapGraphEdge::ODOMETRY) continue;
+    map::SavedEdge saved;
+    saved.edge.match_id = a;
+    saved.edge.query_id = b;
+    saved.edge.T_match_query = ros_conversions::FromPoseMessage(edge.T_from_to);
+    saved.relocalization = edge.type == stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION;
+    // Every edge of a kind has the configured uncertainty (loop_detection, relocalization).
+    saved.edge.information =
+        saved.relocalization
+            ? geometry::DiagonalPoseInformation(relocalizer_options_.translation_sigma,
+                                                relocalizer_options_.rotation_sigma_deg)
+            : geometry::DiagonalPoseInformation(detector_options_.translation_sigma,
+                                                detector_options_.rotation_sigma_deg);
+    edges.push_back(saved);
+  }
+  MapView view = MakeMapView(poses, joins, std::move(edges),
+                             ros_conversions::FromTransformMessage(graph->map_to_odom));
   std::lock_guard<std::mutex> lock(map_view_mutex_);
   map_view_ = std::move(view);
 }
@@ -273,8 +307,12 @@ void LoopDetectorNodelet::Work() {
       try {
         std::lock_guard<std::mutex> lock(mutex_);
         if (mode_ == pipeline::SlamMode::kLocalization) continue;  // the map is not extended
-        const place_recognition::LoopDetection detection =
-            Detector(*message).Process(ros_conversions::FromKeyframeMessage(*message));
+        if (static_cast<std::int64_t>(message->id) < loaded_below_) continue;  // before a load
+        place_recognition::LoopDetector& detector = Detector(*message);
+        map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
+        keyframe.starts_new_map = keyframe.starts_new_map || next_starts_new_map_;
+        next_starts_new_map_ = false;
+        const place_recognition::LoopDetection detection = detector.Process(std::move(keyframe));
         if (detection.loop) {
           stereo_fabmap_slam::LoopEdge edge = ros_conversions::ToLoopEdgeMessage(*detection.loop);
           edge.header = message->header;
@@ -350,6 +388,7 @@ void LoopDetectorNodelet::OnKeyframeUpdate(
   if (!detector_) return;
   for (std::size_t i = 0; i < message->keyframe_ids.size() && i < message->keyframe_poses.size();
        ++i) {
+    if (static_cast<std::int64_t>(message->keyframe_ids[i]) < loaded_below_) continue;
     detector_->UpdatePose(static_cast<std::int64_t>(message->keyframe_ids[i]),
                           ros_conversions::FromPoseMessage(message->keyframe_poses[i]));
   }
@@ -367,8 +406,31 @@ std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
   const place_recognition::LoopDetector& current = detector_ ? *detector_ : *fresh;
   pipeline::LoopClosing::CheckFits(saved, current, detector_ ? *camera_ : saved.camera);
   place_recognition::LoopDetector restored = pipeline::LoopClosing::RestoreDetector(saved, current);
+  // The Backend rebuilds its graph from the same file: a graph that cannot be rebuilt is refused
+  // here, before anything changes.
+  const backend::PoseGraph graph =
+      pipeline::LoopClosing::RestorePoseGraph(saved, pose_graph_options_);
   MakeDetector(saved.camera);
   detector_.emplace(std::move(restored));
+  next_starts_new_map_ = true;
+  // Until the Backend publishes its rebuilt graph, the view is the saved map's.
+  std::vector<std::pair<std::int64_t, Eigen::Isometry3d>> poses;
+  std::vector<std::pair<std::int64_t, std::int64_t>> joins;
+  for (std::size_t i = 0; i < saved.keyframes.size(); ++i) {
+    const map::Keyframe& keyframe = saved.keyframes[i].keyframe;
+    poses.emplace_back(keyframe.id, saved.keyframes[i].T_map_camera);
+    if (i > 0 && !keyframe.starts_new_map) {
+      joins.emplace_back(saved.keyframes[i - 1].keyframe.id, keyframe.id);
+    }
+  }
+  for (const map::SavedEdge& edge : saved.edges) {
+    joins.emplace_back(edge.edge.match_id, edge.edge.query_id);
+  }
+  MapView view = MakeMapView(poses, joins, saved.edges, graph.MapToOdom());
+  {
+    std::lock_guard<std::mutex> lock(map_view_mutex_);
+    map_view_ = std::move(view);
+  }
   stereo_fabmap_slam::MapLoaded message;
   message.header.stamp = ros::Time::now();
   message.path = path;
@@ -382,6 +444,7 @@ std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
       }
     }
   }
+  loaded_below_ = static_cast<std::int64_t>(message.next_keyframe_id);
   map_loaded_publisher_.publish(message);
   return saved.keyframes.size();
 }
@@ -445,6 +508,10 @@ bool LoopDetectorNodelet::OnSetMode(stereo_fabmap_slam::SetMode::Request& reques
   std::lock_guard<std::mutex> lock(mutex_);
   for (const auto& entry : pipeline::kSlamModeNames) {
     if (request.mode == entry.name) {
+      if (mode_ == pipeline::SlamMode::kLocalization &&
+          entry.value == pipeline::SlamMode::kMapping) {
+        next_starts_new_map_ = true;
+      }
       mode_ = entry.value;
       std_msgs::String message;
       message.data = entry.name;

@@ -106,6 +106,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
 
   // A user's relocalize request, answered by the next frame's image callback.
   struct Request {
+    std::uint64_t id = 0;  // answers are matched to the request they were taken for
     bool pending = false, answered = false, reanchor = false;
     stereo_fabmap_slam::RelocalizeFrame::Response result;
     ros::Time stamp;
@@ -114,6 +115,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   std::mutex request_mutex_;
   std::condition_variable request_answered_;
   Request request_;
+  std::uint64_t next_request_id_ = 1;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
 };
 
@@ -206,7 +208,11 @@ void StereoTrackerNodelet::onInit() {
     mode_subscriber_ =
         node.subscribe<std_msgs::String>("mode", 1, [this](const std_msgs::StringConstPtr& mode) {
           std::lock_guard<std::mutex> lock(mutex_);
-          localization_ = mode->data == "localization";
+          const bool localization = mode->data == "localization";
+          // Back to mapping: the odometry goes on in a new piece (the Backend and LoopDetector
+          // start one), which a relocalization joins to the map.
+          if (localization_ && !localization) recovering_ = map_has_keyframes_.load();
+          localization_ = localization;
           localized_ = false;
           frames_since_attempt_ = 0;
         });
@@ -215,7 +221,10 @@ void StereoTrackerNodelet::onInit() {
           std::lock_guard<std::mutex> lock(mutex_);
           // New keyframes and points are numbered above the map's; the odometry's current
           // piece is not in the loaded map until a relocalization finds it there.
+          // A new piece of odometry, continuous in odom: the keyframes so far have ids the map
+          // may use too.
           if (front_end_) {
+            front_end_->StartNewMap();
             front_end_->SkipIdsBelow(static_cast<std::int64_t>(loaded->next_keyframe_id),
                                      static_cast<std::int64_t>(loaded->next_point_id));
           }
@@ -371,9 +380,11 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
     recovering_ = true;
   }
   bool user_request;
+  std::uint64_t request_id = 0;
   {
     std::lock_guard<std::mutex> lock(request_mutex_);
     user_request = request_.pending && !request_.answered;
+    request_id = request_.id;
   }
   const int every = relocalizer_options_.attempt_every_n_frames;
   bool due;
@@ -387,7 +398,8 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
 
   stereo_fabmap_slam::RelocalizeFrame call;
   std::string failure;
-  if (result.reference_keyframe < 0 && result.state == odometry::TrackingState::kLost) {
+  if (result.state == odometry::TrackingState::kLost && !result.keyframe) {
+    // No pose of its own (only the motion model's prediction): nothing to relocalize from.
     failure = "tracking is lost and the frame has too few stereo points";
   } else {
     map::Keyframe frame;
@@ -452,6 +464,7 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
   }
   if (user_request) {
     std::lock_guard<std::mutex> lock(request_mutex_);
+    if (request_.id != request_id || !request_.pending) return;  // its caller gave up
     request_.answered = true;
     request_.result = call.response;
     request_.stamp = stamp;
@@ -474,6 +487,7 @@ bool StereoTrackerNodelet::OnRelocalize(stereo_fabmap_slam::Relocalize::Request&
     return true;
   }
   request_ = Request();
+  request_.id = next_request_id_++;
   request_.pending = true;
   request_.reanchor = request.reanchor;
   const bool answered = request_answered_.wait_for(lock, std::chrono::duration<double>(timeout),

@@ -11,6 +11,23 @@
 
 namespace stereo_fabmap_slam::odometry {
 
+PointMatches MatchedPoints(const features::StereoFeatures& frame,
+                           const std::vector<Eigen::Vector3d>& points,
+                           const std::vector<cv::DMatch>& matches) {
+  PointMatches matched;
+  matched.correspondences.reserve(matches.size());
+  matched.observations.reserve(matches.size());
+  for (const cv::DMatch& match : matches) {
+    const std::size_t i = static_cast<std::size_t>(match.queryIdx);
+    const Eigen::Vector3d& point = points[static_cast<std::size_t>(match.trainIdx)];
+    const cv::Point2f& pixel = frame.keypoints[i].pt;
+    matched.correspondences.push_back(
+        {point, Eigen::Vector2d(pixel.x, pixel.y), frame.HasDepth(i), frame.points[i]});
+    matched.observations.push_back({point, pixel.x, pixel.y, frame.u_right[i]});
+  }
+  return matched;
+}
+
 PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
                           const geometry::StereoCamera& camera, const Eigen::Isometry3d& initial,
                           const PoseRefinementOptions& options,

@@ -182,22 +182,17 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   }
   cv::Mat candidate_descriptors(static_cast<int>(candidate_rows.size()), c.descriptors.cols,
                                 c.descriptors.type());
+  std::vector<Eigen::Vector3d> candidate_points;
   for (std::size_t k = 0; k < candidate_rows.size(); ++k) {
     c.descriptors.row(candidate_rows[k]).copyTo(candidate_descriptors.row(static_cast<int>(k)));
+    candidate_points.push_back(c.points[static_cast<std::size_t>(candidate_rows[k])]);
   }
-  std::vector<geometry::PnpCorrespondence> correspondences;
-  std::vector<odometry::PoseObservation> observations;
-  for (const cv::DMatch& match :
-       features::RatioTestMatches(q.descriptors, candidate_descriptors, descriptor_norm_,
-                                  max_descriptor_distance_, options_.match_ratio)) {
-    const std::size_t qi = static_cast<std::size_t>(match.queryIdx);
-    const Eigen::Vector3d& point =
-        c.points[static_cast<std::size_t>(candidate_rows[match.trainIdx])];
-    const cv::Point2f& pixel = q.keypoints[qi].pt;
-    correspondences.push_back(
-        {point, Eigen::Vector2d(pixel.x, pixel.y), q.HasDepth(qi), q.points[qi]});
-    observations.push_back({point, pixel.x, pixel.y, q.u_right[qi]});
-  }
+  const odometry::PointMatches matched = odometry::MatchedPoints(
+      q, candidate_points,
+      features::RatioTestMatches(q.descriptors, candidate_descriptors, descriptor_norm_,
+                                 max_descriptor_distance_, options_.match_ratio));
+  const std::vector<geometry::PnpCorrespondence>& correspondences = matched.correspondences;
+  const std::vector<odometry::PoseObservation>& observations = matched.observations;
   result.matches = static_cast<int>(correspondences.size());
   if (result.matches < options_.min_inliers) {
     result.reason = "only " + std::to_string(result.matches) + " descriptor matches";

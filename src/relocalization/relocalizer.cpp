@@ -154,18 +154,12 @@ Relocalization Relocalizer::Verify(const features::StereoFeatures& frame,
                                    const PointSet& set) const {
   Relocalization result;
   // 1. Descriptor matches between the frame and the points, with the ratio test.
-  std::vector<geometry::PnpCorrespondence> correspondences;
-  std::vector<odometry::PoseObservation> observations;
-  for (const cv::DMatch& match :
-       features::RatioTestMatches(frame.descriptors, set.descriptors, descriptor_norm_,
-                                  max_descriptor_distance_, options_.match_ratio)) {
-    const std::size_t i = static_cast<std::size_t>(match.queryIdx);
-    const Eigen::Vector3d& point = set.points[static_cast<std::size_t>(match.trainIdx)];
-    const cv::Point2f& pixel = frame.keypoints[i].pt;
-    correspondences.push_back(
-        {point, Eigen::Vector2d(pixel.x, pixel.y), frame.HasDepth(i), frame.points[i]});
-    observations.push_back({point, pixel.x, pixel.y, frame.u_right[i]});
-  }
+  const odometry::PointMatches matched = odometry::MatchedPoints(
+      frame, set.points,
+      features::RatioTestMatches(frame.descriptors, set.descriptors, descriptor_norm_,
+                                 max_descriptor_distance_, options_.match_ratio));
+  const std::vector<geometry::PnpCorrespondence>& correspondences = matched.correspondences;
+  const std::vector<odometry::PoseObservation>& observations = matched.observations;
   result.matches = static_cast<int>(correspondences.size());
   if (result.matches < options_.min_ransac_inliers) {
     result.status = RelocalizationStatus::kTooFewMatches;

@@ -5,9 +5,11 @@
 //   RELOCALIZATION edge in map_graph), and a relocalize call succeeds with a pose close to
 //   ground truth;
 // - after the bag ended, relocalize times out: no images;
-// - save_map writes the map; load_map refuses a damaged file and loads the saved one; in
-//   localization mode a replay of the bag's start is found in the loaded map (pose against
-//   ground truth, map -> odom corrections) and adds no keyframe.
+// - save_map writes the map (once at 12 s, once at the end); load_map refuses a damaged file
+//   (the map stays as it was) and loads the early map in place of the whole one; in
+//   localization mode a replay of the bag's start is found in it (pose against ground truth,
+//   map -> odom corrections) and adds no keyframe; back in mapping mode a replay extends the map
+//   again, its new piece of odometry joined by a relocalization edge.
 #include <sys/wait.h>
 
 #include <atomic>
@@ -73,8 +75,9 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
 
   std::mutex mutex;
   double first_stamp = -1, last_stamp = -1;
-  int relocalization_edges = 0, corrections = 0;
-  std::size_t graph_keyframes = 0;
+  int relocalization_edges = 0, corrections = 0;  // the most in any map_graph; corrections seen
+  int latest_relocalization_edges = 0;            // in the latest map_graph
+  std::size_t graph_keyframes = 0;                // in the latest map_graph
   ros::NodeHandle node;
   const ros::Subscriber odometry_subscriber = node.subscribe<nav_msgs::Odometry>(
       "/odometry", 100, [&](const nav_msgs::OdometryConstPtr& message) {
@@ -90,6 +93,7 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
           count += edge.type == stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION ? 1 : 0;
         }
         relocalization_edges = std::max(relocalization_edges, count);
+        latest_relocalization_edges = count;
         graph_keyframes = message->keyframe_ids.size();
       });
   const ros::Subscriber correction_subscriber = node.subscribe<geometry_msgs::TransformStamped>(
@@ -125,9 +129,17 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
     return first_stamp < 0 ? -1.0 : last_stamp - first_stamp;
   };
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(kSeconds * 3 + 60);
+  // A map of the first 12 s is saved on the way, to be loaded in place of the whole one later.
+  ros::ServiceClient save = node.serviceClient<stereo_fabmap_slam::MapFile>("/save_map");
+  stereo_fabmap_slam::MapFile early;
+  early.request.path = temp.path() + "/early.map";
+  bool early_saved = false;
   while (bag_time() < kCut + 3.0 && ros::WallTime::now() < deadline) {
+    if (!early_saved && bag_time() > 12.0) early_saved = save.call(early);
     ros::WallDuration(0.1).sleep();
   }
+  ASSERT_TRUE(early_saved);
+  EXPECT_TRUE(early.response.success) << early.response.message;
   ASSERT_GE(bag_time(), kCut + 3.0) << ReadTextFile(temp.path() + "/roslaunch.log");
   // A relocalized pose against ground truth: the map frame is the camera at the first frame.
   const auto pose_error = [&](const geometry_msgs::PoseStamped& pose) {
@@ -163,16 +175,16 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   EXPECT_NE(no_images.response.message.find("no stereo images"), std::string::npos)
       << no_images.response.message;
 
-  // Save the map, refuse a damaged copy, load the saved one, use it in localization mode.
-  ros::ServiceClient save = node.serviceClient<stereo_fabmap_slam::MapFile>("/save_map");
+  // Save the whole map; refuse a damaged copy (the map stays whole); load the early map in its
+  // place; use it in localization mode, then map again.
   ros::ServiceClient load = node.serviceClient<stereo_fabmap_slam::MapFile>("/load_map");
   ros::ServiceClient set_mode = node.serviceClient<stereo_fabmap_slam::SetMode>("/set_mode");
-  stereo_fabmap_slam::MapFile saved;
-  saved.request.path = temp.path() + "/kidnap.map";
-  ASSERT_TRUE(save.call(saved));
-  EXPECT_TRUE(saved.response.success) << saved.response.message;
-  EXPECT_GT(saved.response.keyframes, 50u);
-  const std::string bytes = ReadTextFile(saved.request.path);
+  stereo_fabmap_slam::MapFile whole;
+  whole.request.path = temp.path() + "/whole.map";
+  ASSERT_TRUE(save.call(whole));
+  EXPECT_TRUE(whole.response.success) << whole.response.message;
+  EXPECT_GT(whole.response.keyframes, early.response.keyframes + 50);
+  const std::string bytes = ReadTextFile(whole.request.path);
   {
     std::FILE* file = std::fopen((temp.path() + "/truncated.map").c_str(), "wb");
     ASSERT_NE(file, nullptr);
@@ -183,13 +195,26 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   damaged.request.path = temp.path() + "/truncated.map";
   ASSERT_TRUE(load.call(damaged));
   EXPECT_FALSE(damaged.response.success);
-  EXPECT_NE(damaged.response.message.find("unchanged"), std::string::npos)
-      << damaged.response.message;
+  stereo_fabmap_slam::MapFile unchanged;
+  unchanged.request.path = temp.path() + "/unchanged.map";
+  ASSERT_TRUE(save.call(unchanged));
+  EXPECT_EQ(unchanged.response.keyframes, whole.response.keyframes)
+      << "the refused load changed the map";
+
   stereo_fabmap_slam::MapFile loaded;
-  loaded.request.path = saved.request.path;
+  loaded.request.path = early.request.path;
   ASSERT_TRUE(load.call(loaded));
   EXPECT_TRUE(loaded.response.success) << loaded.response.message;
-  EXPECT_EQ(loaded.response.keyframes, saved.response.keyframes);
+  EXPECT_EQ(loaded.response.keyframes, early.response.keyframes);
+  // The Backend rebuilds its graph from the file: map_graph shrinks to the early map.
+  const auto graph_size = [&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return graph_keyframes;
+  };
+  for (int i = 0; i < 100 && graph_size() != early.response.keyframes; ++i) {
+    ros::WallDuration(0.1).sleep();
+  }
+  EXPECT_EQ(graph_size(), early.response.keyframes);
   stereo_fabmap_slam::SetMode localization;
   localization.request.mode = "localization";
   ASSERT_TRUE(set_mode.call(localization));
@@ -198,30 +223,26 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   unknown_mode.request.mode = "exploring";
   ASSERT_TRUE(set_mode.call(unknown_mode));
   EXPECT_FALSE(unknown_mode.response.success);
-  ros::WallDuration(2.0).sleep();  // the Backend rebuilds its graph from the file
-  std::size_t keyframes_loaded;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    keyframes_loaded = graph_keyframes;
-  }
-  EXPECT_EQ(keyframes_loaded, saved.response.keyframes);
 
-  // A replay of the bag's first 12 s (time goes back: the tracker starts afresh), with a
+  // A replay of the bag's first 10 s (time goes back: the tracker starts afresh), with a
   // relocalize call in its middle.
+  const auto replay = [&](double seconds, stereo_fabmap_slam::Relocalize* call) {
+    bool called = false;
+    std::thread caller([&] {
+      ros::WallDuration(seconds / 2).sleep();
+      call->request.timeout = 2.0;
+      called = client.call(*call);
+    });
+    EXPECT_EQ(std::system(("rosbag play --clock --quiet -u " + std::to_string(seconds) + " " +
+                           sequence + "/sequence.bag > " + temp.path() + "/replay.log 2>&1")
+                              .c_str()),
+              0);
+    caller.join();
+    ros::WallDuration(1.0).sleep();
+    return called;
+  };
   stereo_fabmap_slam::Relocalize replayed;
-  bool replay_called = false;
-  std::thread replay_caller([&] {
-    ros::WallDuration(6.0).sleep();
-    replayed.request.timeout = 2.0;
-    replay_called = client.call(replayed);
-  });
-  EXPECT_EQ(std::system(("rosbag play --clock --quiet -u 12 " + sequence + "/sequence.bag > " +
-                         temp.path() + "/replay.log 2>&1")
-                            .c_str()),
-            0);
-  replay_caller.join();
-  ros::WallDuration(1.0).sleep();
-  ASSERT_TRUE(replay_called);
+  ASSERT_TRUE(replay(10.0, &replayed));
   EXPECT_TRUE(replayed.response.success) << replayed.response.message;
   if (replayed.response.success) {
     const Eigen::Isometry3d error = pose_error(replayed.response.pose);
@@ -230,8 +251,22 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   }
   {
     std::lock_guard<std::mutex> lock(mutex);
-    EXPECT_GT(corrections, 0);                     // map -> odom from relocalizations
-    EXPECT_EQ(graph_keyframes, keyframes_loaded);  // localization adds no keyframe
+    EXPECT_GT(corrections, 0);                             // map -> odom from relocalizations
+    EXPECT_EQ(graph_keyframes, early.response.keyframes);  // localization adds no keyframe
+    EXPECT_EQ(latest_relocalization_edges, 0);             // the early map has none
+  }
+
+  // Mapping again: the odometry goes on in a new piece, which recovery joins to the map.
+  stereo_fabmap_slam::SetMode mapping;
+  mapping.request.mode = "mapping";
+  ASSERT_TRUE(set_mode.call(mapping));
+  EXPECT_TRUE(mapping.response.success);
+  stereo_fabmap_slam::Relocalize remapped;
+  ASSERT_TRUE(replay(6.0, &remapped));
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_GT(graph_keyframes, early.response.keyframes);  // the map grows again
+    EXPECT_GE(latest_relocalization_edges, 1);             // the new piece joined to it
   }
 
   kill(launch_pid, SIGINT);

@@ -3,7 +3,10 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/core/types.hpp>
 
+#include "stereo_fabmap_slam/features/stereo_features.h"
+#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 #include "stereo_fabmap_slam/odometry/odometry_options.h"
@@ -22,6 +25,16 @@ struct PoseRefinement {
   std::vector<bool> inlier;  // per observation
   int inliers = 0;
 };
+
+// A frame's key points matched to 3-D points (match.queryIdx: key point, match.trainIdx: point),
+// in the two forms PnP RANSAC and RefinePose take, in the order of `matches`.
+struct PointMatches {
+  std::vector<geometry::PnpCorrespondence> correspondences;
+  std::vector<PoseObservation> observations;
+};
+PointMatches MatchedPoints(const features::StereoFeatures& frame,
+                           const std::vector<Eigen::Vector3d>& points,
+                           const std::vector<cv::DMatch>& matches);
 
 // Motion-only optimisation: the camera pose that minimises the robust (Huber) stereo
 // reprojection error of fixed map points. After each round every observation is classified

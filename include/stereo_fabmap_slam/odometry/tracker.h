@@ -52,6 +52,10 @@ class Tracker {
   void ApplyUpdate(const map::KeyframeUpdate& update);
   // Forget the map and the motion (e.g. time went backwards); the next frame starts a new map.
   void Reset();
+  // Forget the local map but not the motion: the next frame starts a new piece of map where the
+  // odometry predicts it, so odom stays continuous (e.g. after a map was loaded whose keyframe
+  // ids the local map's may share).
+  void StartNewMap() { local_map_.Clear(); }
   // New keyframes and map points get ids of at least these (a loaded map holds the lower ones).
   void SkipIdsBelow(std::int64_t keyframe_id, std::int64_t point_id) {
     next_keyframe_id_ = std::max(next_keyframe_id_, keyframe_id);
