@@ -137,6 +137,7 @@ Relocalizer::PointSet Relocalizer::GatherPoints(const map::KeyframeDatabase& dat
           i < keyframe.map_point_ids.size() ? keyframe.map_point_ids[i] : std::int64_t{-1};
       if (id >= 0 && !seen.insert(id).second) continue;
       set.points.push_back(T_candidate_keyframe * keyframe.features.points[i]);
+      if (stored == &candidate) ++set.candidate_points;
       rows.emplace_back(&keyframe.features.descriptors, static_cast<int>(i));
     }
   }
@@ -153,11 +154,12 @@ Relocalizer::PointSet Relocalizer::GatherPoints(const map::KeyframeDatabase& dat
 Relocalization Relocalizer::Verify(const features::StereoFeatures& frame,
                                    const PointSet& set) const {
   Relocalization result;
-  // 1. Descriptor matches between the frame and the points, with the ratio test.
+  // 1. Descriptor matches between the frame and the candidate's own points, with the ratio test.
   const odometry::PointMatches matched = odometry::MatchedPoints(
       frame, set.points,
-      features::RatioTestMatches(frame.descriptors, set.descriptors, descriptor_norm_,
-                                 max_descriptor_distance_, options_.match_ratio));
+      features::RatioTestMatches(frame.descriptors,
+                                 set.descriptors.rowRange(0, set.candidate_points),
+                                 descriptor_norm_, max_descriptor_distance_, options_.match_ratio));
   const std::vector<geometry::PnpCorrespondence>& correspondences = matched.correspondences;
   const std::vector<odometry::PoseObservation>& observations = matched.observations;
   result.matches = static_cast<int>(correspondences.size());

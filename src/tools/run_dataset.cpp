@@ -311,13 +311,21 @@ int main(int argc, char** argv) {
       // Ground truth is the body frame: move it to the rectified left camera we estimate.
       const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
           sequence.ground_truth(), rectifier.T_body_rectified_left());
-      const evaluation::EvaluationResult result =
-          evaluation::EvaluateTrajectory(truth, trajectory, evaluation::EvaluationOptions{});
       const evaluation::EvaluationResult odometry_result = evaluation::EvaluateTrajectory(
           truth, odometry_trajectory, evaluation::EvaluationOptions{});
       std::snprintf(buffer, sizeof(buffer), ", \"ate_rmse_odometry\": %.6f",
                     odometry_result.ate.rmse);
       json += buffer;
+    }
+    // The map trajectory can be (nearly) empty: localization in a map that never finds the
+    // camera (another building) gives no pose in the map at all.
+    if (sequence.has_ground_truth() && trajectory.size() < 3) {
+      json += ", \"ate_matched\": 0, \"ate_note\": \"fewer than 3 frames have a pose in the map\"";
+    } else if (sequence.has_ground_truth()) {
+      const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
+          sequence.ground_truth(), rectifier.T_body_rectified_left());
+      const evaluation::EvaluationResult result =
+          evaluation::EvaluateTrajectory(truth, trajectory, evaluation::EvaluationOptions{});
       const auto& est = result.aligned_estimate;
       const auto& ref = result.matched_reference;
       const Eigen::Vector3d est_move =

@@ -33,7 +33,7 @@ struct Relocalization {
   std::int64_t keyframe_id = -1;  // the keyframe the frame was found against
   // The frame's camera in that keyframe's camera frame; the caller maps it (T_map_keyframe).
   Eigen::Isometry3d T_keyframe_camera = Eigen::Isometry3d::Identity();
-  int matches = 0;         // descriptor matches to the keyframe's and its neighbours' points
+  int matches = 0;         // descriptor matches to the keyframe's stereo points
   int inliers = 0;         // after the guided search and refinement
   int inlier_cells = 0;    // of 16
   double probability = 0;  // FAB-MAP's posterior of the keyframe
@@ -43,12 +43,12 @@ struct Relocalization {
 };
 
 // Finds one frame in the keyframe map, with no prior on its pose: FAB-MAP's best keyframes among
-// those `allowed` (several, not only the best), then for each: descriptor matches to its and its
-// segment neighbours' stereo points, PnP RANSAC, robust refinement, a guided search by projection
-// for the points the descriptor matching missed, refinement again, and acceptance on an inlier
-// count and their spread over the image. The first candidate (in FAB-MAP's order) that passes
-// wins; a failure reports the candidate that got furthest.
-// Stateless between calls; no clock.
+// those `allowed` (several, not only the best), then for each: descriptor matches to its stereo
+// points, PnP RANSAC, robust refinement, a guided search by projection of its and its segment
+// neighbours' points for what the descriptor matching missed, refinement again, and acceptance on
+// an inlier count and their spread over the image. The first candidate (in FAB-MAP's order) that
+// passes wins; a failure reports the candidate that got furthest. Stateless between calls; no
+// clock.
 class Relocalizer {
  public:
   using KeyframeFilter = std::function<bool(const map::StoredKeyframe&)>;
@@ -70,7 +70,8 @@ class Relocalizer {
   // The candidate's stereo points and its neighbours', in the candidate's camera frame.
   struct PointSet {
     std::vector<Eigen::Vector3d> points;
-    cv::Mat descriptors;  // one row per point
+    cv::Mat descriptors;       // one row per point
+    int candidate_points = 0;  // the first ones are the candidate's own
   };
   PointSet GatherPoints(const map::KeyframeDatabase& database,
                         const map::StoredKeyframe& candidate) const;
