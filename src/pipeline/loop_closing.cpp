@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/pipeline/loop_closing.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -37,6 +38,7 @@ place_recognition::LoopDetector LoopClosing::LoadDetector(
 void LoopClosing::AddKeyframe(const map::Keyframe& keyframe, const map::KeyframeUpdate& update) {
   map::Keyframe adjusted = keyframe;
   for (const auto& [id, pose] : update.keyframe_poses) {
+    if (id < loaded_below_) continue;  // a loaded map's, or this run's from before the load
     if (id == keyframe.id) {
       adjusted.T_world_camera = pose;
     } else {
@@ -93,6 +95,9 @@ void LoopClosing::Load(const map::SavedMap& saved, const geometry::StereoCamera&
   detector_ = std::move(detector);
   pose_graph_ = std::move(graph);
   next_starts_new_map_ = true;
+  for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+    loaded_below_ = std::max(loaded_below_, keyframe.keyframe.id + 1);
+  }
 }
 
 void LoopClosing::CheckFits(const map::SavedMap& saved,

@@ -146,6 +146,9 @@ void StereoSlam::LoadMap(const std::string& path) {
       next_point = std::max(next_point, point + 1);
     }
   }
+  // A new piece of odometry, numbered above the map: this run's keyframes so far (if any) may
+  // share the map's ids.
+  if (!frames_.empty()) front_end_.StartNewMap();
   front_end_.SkipIdsBelow(next_keyframe, next_point);
   anchor_ = saved.keyframes.empty() ? -1 : saved.keyframes.front().keyframe.id;
   localized_ = false;

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_world.h"
+#include "toy_place_recognition.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
@@ -19,27 +20,11 @@ using place_recognition::LoopDetection;
 // A small vocabulary and Chow-Liu tree trained on random descriptors: FAB-MAP is not what these
 // tests measure (every stored keyframe is verified: min_probability 0).
 place_recognition::LoopDetector MakeDetector() {
-  cv::Mat training(400, 64, CV_8U);
-  cv::RNG rng(11);
-  rng.fill(training, cv::RNG::UNIFORM, 0, 256);
-  place_recognition::VocabularyOptions vocabulary_options;
-  vocabulary_options.branching = 4;
-  vocabulary_options.depth = 2;
-  place_recognition::Vocabulary vocabulary =
-      place_recognition::Vocabulary::Train(training, vocabulary_options);
-  std::vector<std::vector<int>> word_sets;
-  for (int image = 0; image < 8; ++image) {
-    word_sets.push_back(vocabulary.WordSet(training.rowRange(image * 50, image * 50 + 50)));
-  }
-  place_recognition::FabMap fabmap(
-      place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size()),
-      place_recognition::FabMapOptions());
   place_recognition::LoopDetectorOptions options;
   options.min_age = 5.0;
   options.min_probability = 0.0;
   options.max_candidates = 5;
-  return place_recognition::LoopDetector(options, std::move(vocabulary), std::move(fabmap),
-                                         kTestCamera, cv::NORM_HAMMING, 60.0);
+  return ToyLoopDetector(11, options);
 }
 
 Eigen::Isometry3d At(double x, double y, double z) {

@@ -14,35 +14,13 @@
 #include "stereo_fabmap_slam/pipeline/loop_closing.h"
 #include "stereo_world.h"
 #include "test_support.h"
+#include "toy_place_recognition.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
-// A detector over a small vocabulary trained on random descriptors (seeded: another seed gives
-// another vocabulary).
-place_recognition::LoopDetector MakeDetector(std::uint64_t seed) {
-  cv::Mat training(400, 64, CV_8U);
-  cv::RNG rng(seed);
-  rng.fill(training, cv::RNG::UNIFORM, 0, 256);
-  place_recognition::VocabularyOptions vocabulary_options;
-  vocabulary_options.branching = 4;
-  vocabulary_options.depth = 2;
-  place_recognition::Vocabulary vocabulary =
-      place_recognition::Vocabulary::Train(training, vocabulary_options);
-  std::vector<std::vector<int>> word_sets;
-  for (int image = 0; image < 8; ++image) {
-    word_sets.push_back(vocabulary.WordSet(training.rowRange(image * 50, image * 50 + 50)));
-  }
-  place_recognition::FabMap fabmap(
-      place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size()),
-      place_recognition::FabMapOptions());
-  return place_recognition::LoopDetector(place_recognition::LoopDetectorOptions(),
-                                         std::move(vocabulary), std::move(fabmap), kTestCamera,
-                                         cv::NORM_HAMMING, 60.0);
-}
-
 pipeline::LoopClosing MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
-  pipeline::LoopClosing map(MakeDetector(vocabulary_seed), backend::PoseGraphOptions(),
+  pipeline::LoopClosing map(ToyLoopDetector(vocabulary_seed), backend::PoseGraphOptions(),
                             [] { return 0.0; });
   StereoWorld world;
   world.Add(RandomPoints(300, 3), 5);

@@ -76,6 +76,9 @@ class LoopClosing {
   backend::PoseGraph pose_graph_;
   Clock clock_;
   bool next_starts_new_map_ = false;  // after Load
+  // Keyframes below this id are a loaded map's: the bundle adjustment of this run never moves
+  // them (an update with such an id is about this run's keyframes from before the load).
+  std::int64_t loaded_below_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::pipeline
