@@ -219,10 +219,9 @@ void StereoTrackerNodelet::onInit() {
     map_loaded_subscriber_ = node.subscribe<stereo_fabmap_slam::MapLoaded>(
         "map_loaded", 1, [this](const stereo_fabmap_slam::MapLoadedConstPtr& loaded) {
           std::lock_guard<std::mutex> lock(mutex_);
-          // New keyframes and points are numbered above the map's; the odometry's current
-          // piece is not in the loaded map until a relocalization finds it there.
-          // A new piece of odometry, continuous in odom: the keyframes so far have ids the map
-          // may use too.
+          // A new piece of odometry, continuous in odom, numbered above the map (the keyframes
+          // so far have ids the map may use too); it is not in the loaded map until a
+          // relocalization finds it there.
           if (front_end_) {
             front_end_->StartNewMap();
             front_end_->SkipIdsBelow(static_cast<std::int64_t>(loaded->next_keyframe_id),
