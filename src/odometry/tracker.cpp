@@ -51,6 +51,7 @@ void Tracker::Reset() {
   local_map_.Clear();
   has_last_ = false;
   velocity_ = Eigen::Isometry3d::Identity();
+  velocity_dt_ = 0;
 }
 
 std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFeatures& features,
@@ -171,8 +172,13 @@ void Tracker::StartMap(double timestamp, features::StereoFeatures features,
   result->reason += (result->reason.empty() ? "" : "; ") + std::string("map started");
 }
 
-void Tracker::Remember(const Eigen::Isometry3d& T_world_camera, TrackingResult* result) {
-  if (has_last_) velocity_ = last_T_world_camera_.inverse() * T_world_camera;
+void Tracker::Remember(double timestamp, const Eigen::Isometry3d& T_world_camera,
+                       TrackingResult* result) {
+  if (has_last_) {
+    velocity_ = last_T_world_camera_.inverse() * T_world_camera;
+    velocity_dt_ = timestamp - last_timestamp_;
+  }
+  last_timestamp_ = timestamp;
   has_last_ = true;
   last_T_world_camera_ = T_world_camera;
   result->T_world_camera = T_world_camera;
@@ -186,14 +192,29 @@ TrackingResult Tracker::StartOver(double timestamp, features::StereoFeatures fea
                                   const Eigen::Isometry3d& predicted, TrackingResult result) {
   StartMap(timestamp, std::move(features), predicted, &result);
   if (!result.keyframe) result.state = TrackingState::kLost;
-  Remember(predicted, &result);
+  Remember(timestamp, predicted, &result);
   return result;
+}
+
+Eigen::Isometry3d Tracker::Predict(double timestamp) const {
+  if (!has_last_) return Eigen::Isometry3d::Identity();
+  // The motion over the time to this frame: when frames were skipped (a busy tracker, a bag
+  // played faster than real time) or come faster, the last motion is scaled by the ratio of the
+  // gaps. Gaps within a third of each other count as the same: camera clocks jitter, and a
+  // scaled prediction would only add that jitter to the motion.
+  const double dt = timestamp - last_timestamp_;
+  const double ratio = velocity_dt_ > 0 && dt > 0 ? dt / velocity_dt_ : 1.0;
+  if (ratio < 1.5 && ratio > 1 / 1.5) return last_T_world_camera_ * velocity_;
+  const Eigen::AngleAxisd rotation(velocity_.linear());
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() = Eigen::AngleAxisd(ratio * rotation.angle(), rotation.axis()).toRotationMatrix();
+  scaled.translation() = ratio * velocity_.translation();
+  return last_T_world_camera_ * scaled;
 }
 
 TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features) {
   TrackingResult result;
-  const Eigen::Isometry3d predicted =
-      has_last_ ? last_T_world_camera_ * velocity_ : Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d predicted = Predict(timestamp);
 
   if (local_map_.empty()) {
     result.state = TrackingState::kOk;
@@ -267,7 +288,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
         MakeKeyframe(timestamp, std::move(features), T_world_camera, inlier_matches, false);
     result.reason += (result.reason.empty() ? "" : "; ") + ("keyframe: " + decision.reason);
   }
-  Remember(T_world_camera, &result);
+  Remember(timestamp, T_world_camera, &result);
   return result;
 }
 

@@ -1,4 +1,5 @@
-// Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model.
+// Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model;
+// the motion model spans skipped frames.
 #include "stereo_fabmap_slam/odometry/tracker.h"
 
 #include <gtest/gtest.h>
@@ -67,6 +68,33 @@ TEST(Tracker, ApplyUpdateWithoutAMapChangesNothing) {
       tracker.Track(0.0, Observe(MakeWorld(300), Eigen::Isometry3d::Identity()));
   EXPECT_TRUE(first.keyframe.has_value());
   EXPECT_TRUE(first.T_world_camera.isApprox(Eigen::Isometry3d::Identity()));
+}
+
+TEST(Tracker, SkippedFramesDoNotLoseTracking) {
+  // A camera sliding sideways 0.3 m every 10 ms past points 3-8 m away. After three frames come
+  // three skipped ones (a busy tracker): 0.9 m of motion that a prediction of one frame's motion
+  // misses by 51-137 px, beyond the widest search around it (3 x 15 px). Only a motion model
+  // that spans the gap's time predicts the pose after it well enough.
+  StereoWorld world;
+  world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
+  odometry::TrackerOptions options;
+  options.parallel = false;
+  odometry::Tracker tracker(options, odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,
+                            60.0);
+  const auto at = [](double x) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation().x() = x;
+    return pose;
+  };
+  for (const int frame : {0, 1, 2}) {
+    const odometry::TrackingResult result =
+        tracker.Track(0.01 * frame, Observe(world, at(0.3 * frame)));
+    ASSERT_NE(result.state, odometry::TrackingState::kLost) << frame << ": " << result.reason;
+  }
+  const odometry::TrackingResult after_gap = tracker.Track(0.06, Observe(world, at(1.8)));
+  EXPECT_NE(after_gap.state, odometry::TrackingState::kLost) << after_gap.reason;
+  EXPECT_FALSE(after_gap.keyframe && after_gap.keyframe->starts_new_map) << after_gap.reason;
+  EXPECT_LT((after_gap.T_world_camera.translation() - at(1.8).translation()).norm(), 1e-3);
 }
 
 }  // namespace

@@ -84,7 +84,9 @@ class Tracker {
   // the frame is lost otherwise.
   TrackingResult StartOver(double timestamp, features::StereoFeatures features,
                            const Eigen::Isometry3d& predicted, TrackingResult result);
-  void Remember(const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
+  void Remember(double timestamp, const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
+  // The constant-velocity prediction for a frame at `timestamp`.
+  Eigen::Isometry3d Predict(double timestamp) const;
 
   TrackerOptions options_;
   KeyframePolicy keyframe_policy_;
@@ -101,6 +103,8 @@ class Tracker {
   bool has_last_ = false;
   Eigen::Isometry3d last_T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();  // T_previous_current
+  double last_timestamp_ = 0;
+  double velocity_dt_ = 0;  // [s] the time velocity_ spans; 0: unknown
   Eigen::Isometry3d last_keyframe_pose_ = Eigen::Isometry3d::Identity();
   double last_keyframe_time_ = 0;
   int most_tracked_since_keyframe_ = 0;
