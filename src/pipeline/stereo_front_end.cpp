@@ -34,7 +34,9 @@ FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw
   lap(&timing.description_ms);
   features::StereoFeatures features = extractor_.Match(left, right, std::move(described));
   lap(&timing.stereo_ms);
-  output.features = features;
+  // Kept only where a relocalization may need them after tracking consumed them (place
+  // recognition on): a copy per frame is not free.
+  if (place_describer_) output.features = features;
   output.tracking = tracker_.Track(timestamp, std::move(features));
   lap(&timing.tracking_ms);
   last_left_ = left;

@@ -36,13 +36,8 @@ class LoopClosing {
       const geometry::StereoCamera& camera, int descriptor_norm, double max_descriptor_distance);
 
   // `update` is what the bundle adjustment changed when it added `keyframe` (odom frame): the
-  // keyframe joins the map (pose graph, keyframe database, FAB-MAP), then it is compared with
-  // the map for a loop.
-  LoopClosingOutput Process(const map::Keyframe& keyframe, const map::KeyframeUpdate& update) {
-    AddKeyframe(keyframe, update);
-    return DetectLoop(keyframe.id);
-  }
-  // The two halves of Process, for a caller that relocalizes in between.
+  // keyframe joins the map (pose graph, keyframe database, FAB-MAP). DetectLoop then compares it
+  // with the map; a caller relocalizes in between (StereoSlam).
   void AddKeyframe(const map::Keyframe& keyframe, const map::KeyframeUpdate& update);
   LoopClosingOutput DetectLoop(std::int64_t keyframe_id);
   // A frame whose reference keyframe is `keyframe_id` was relocalized against `edge.match_id`:

@@ -47,7 +47,8 @@ struct FrameTiming {
 struct FrontEndOutput {
   odometry::TrackingResult tracking;
   FrameTiming timing;
-  // The frame's stereo features (a copy of what the tracker used), for relocalization.
+  // The frame's stereo features (a copy of what the tracker used), for relocalization; empty
+  // without place features.
   features::StereoFeatures features;
 };
 

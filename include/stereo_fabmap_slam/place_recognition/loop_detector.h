@@ -91,7 +91,6 @@ class LoopDetector {
     database_.UpdatePose(id, T_odom_camera);
   }
   const map::KeyframeDatabase& database() const { return database_; }
-  std::size_t places() const { return place_keyframes_.size(); }
 
  private:
   // A query of segment -1 (not stored) has no odometry to check the verified pose against.
