@@ -93,6 +93,8 @@ void BackendNodelet::onInit() {
   map_frame_ = private_node.param<std::string>("map_frame", "map");
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
   const double tf_rate = private_node.param("tf_rate", 20.0);
+  // A user whose map -> odom comes from elsewhere turns the package's tf off.
+  const bool publish_tf = private_node.param("publish_tf", true);
 
   ros::NodeHandle& node = getNodeHandle();
   update_publisher_ = node.advertise<stereo_fabmap_slam::KeyframeUpdate>("keyframe_updates", 100);
@@ -107,8 +109,10 @@ void BackendNodelet::onInit() {
       node.subscribe("map_to_odom_correction", 10, &BackendNodelet::OnCorrection, this);
   // map -> odom is broadcast steadily, not only when it changes, so that tf can look up any
   // recent time without extrapolating.
-  tf_timer_ =
-      node.createWallTimer(ros::WallDuration(1.0 / tf_rate), &BackendNodelet::OnTfTimer, this);
+  if (publish_tf) {
+    tf_timer_ =
+        node.createWallTimer(ros::WallDuration(1.0 / tf_rate), &BackendNodelet::OnTfTimer, this);
+  }
 }
 
 BackendNodelet::~BackendNodelet() {

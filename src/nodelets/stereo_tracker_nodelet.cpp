@@ -1,8 +1,9 @@
-// StereoTracker: synchronised raw stereo images in, odometry, tf odom -> camera and keyframes out;
-// the relocalize service. After a tracking loss it asks the LoopDetector (relocalize_frame) to
-// find frames in the map until one is found, whose edge joins the new piece of odometry to the
-// map. Everything algorithmic is pipeline::StereoFrontEnd and the LoopDetector's Relocalizer;
-// this file converts, calls and publishes.
+// StereoTracker: synchronised raw stereo images in, odometry, tf odom -> base_link (and the
+// camera's mounting, base_link -> camera) and keyframes out; the relocalize service. After a
+// tracking loss it asks the LoopDetector (relocalize_frame) to find frames in the map until one is
+// found, whose edge joins the new piece of odometry to the map. Everything algorithmic is
+// pipeline::StereoFrontEnd and the LoopDetector's Relocalizer; this file converts, calls and
+// publishes.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -11,6 +12,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -29,9 +31,12 @@
 #include <stereo_fabmap_slam/MapLoaded.h>
 #include <stereo_fabmap_slam/Relocalize.h>
 #include <stereo_fabmap_slam/RelocalizeFrame.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "base_frame_convention.h"
+#include "odometry_message_builder.h"
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
@@ -56,6 +61,8 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
 
   void onInit() override;
   void LoadOptions(const ros::NodeHandle& private_node);
+  // Sets the front end and, from its rectified camera's mounting, the frame conventions; once.
+  void StartFrontEnd(const camera::StereoRectifier& rectifier);
   void OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& left,
                     const sensor_msgs::CameraInfoConstPtr& right);
   void OnImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
@@ -72,7 +79,13 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   camera::RectificationOptions rectification_options_;
   pipeline::FrontEndOptions options_;
   relocalization::RelocalizerOptions relocalizer_options_;
-  std::string odom_frame_, camera_frame_, map_frame_;
+  std::string odom_frame_, base_frame_, camera_frame_, map_frame_;
+  bool publish_tf_ = true;
+  // ~base_to_camera [x y z qx qy qz qw]: the raw left camera in the base frame, replacing the
+  // calibration's T_BS (and the identity camera_info implies).
+  std::optional<Eigen::Isometry3d> T_base_left_raw_;
+  std::optional<ros_conversions::BaseFrameConvention> frames_;  // set with front_end_
+  std::optional<ros_conversions::OdometryMessageBuilder> odometry_builder_;
   std::mutex mutex_;  // image and update callbacks may run on different manager threads
   std::unique_ptr<pipeline::StereoFrontEnd> front_end_;
   ros::Time last_stamp_;
@@ -117,6 +130,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   Request request_;
   std::uint64_t next_request_id_ = 1;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_broadcaster_;
 };
 
 double SteadyMilliseconds() {
@@ -161,9 +175,31 @@ void StereoTrackerNodelet::onInit() {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
+  // REP-105 names, as rtabmap_ros and slam_toolbox default to.
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
-  camera_frame_ = private_node.param<std::string>("camera_frame", "camera");
+  base_frame_ = private_node.param<std::string>("base_frame", "base_link");
+  camera_frame_ = private_node.param<std::string>("camera_frame", "camera_optical");
   map_frame_ = private_node.param<std::string>("map_frame", "map");
+  publish_tf_ = private_node.param("publish_tf", true);
+  std::vector<double> mount;
+  if (private_node.getParam("base_to_camera", mount)) {
+    if (mount.size() != 7) {
+      NODELET_FATAL("~base_to_camera needs 7 numbers [x, y, z, qx, qy, qz, qw], got %zu",
+                    mount.size());
+      throw std::runtime_error("bad ~base_to_camera");
+    }
+    const Eigen::Quaterniond rotation(mount[6], mount[3], mount[4], mount[5]);
+    if (rotation.norm() < 1e-6) {
+      NODELET_FATAL("~base_to_camera: the quaternion has zero length");
+      throw std::runtime_error("bad ~base_to_camera");
+    }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = rotation.normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(mount[0], mount[1], mount[2]);
+    T_base_left_raw_ = T;
+  }
+  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  static_tf_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
   const int queue_size = private_node.param("queue_size", 10);
   queue_size_ = queue_size;
   const bool approximate = private_node.param("approximate_sync", false);
@@ -176,11 +212,15 @@ void StereoTrackerNodelet::onInit() {
       throw std::runtime_error("no calibration");
     }
     try {
-      const camera::StereoCalibration calibration =
-          camera::ReadStereoCalibrationYaml(calibration_file);
-      front_end_ = std::make_unique<pipeline::StereoFrontEnd>(
-          options_, camera::StereoRectifier::FromCalibration(calibration, rectification_options_),
-          SteadyMilliseconds);
+      camera::StereoCalibration calibration = camera::ReadStereoCalibrationYaml(calibration_file);
+      if (T_base_left_raw_) {
+        // Move both cameras so that the left one sits at the given mounting; the stereo
+        // extrinsic between them stays.
+        const Eigen::Isometry3d move = *T_base_left_raw_ * calibration.left.T_body_camera.inverse();
+        calibration.left.T_body_camera = move * calibration.left.T_body_camera;
+        calibration.right.T_body_camera = move * calibration.right.T_body_camera;
+      }
+      StartFrontEnd(camera::StereoRectifier::FromCalibration(calibration, rectification_options_));
     } catch (const std::exception& error) {
       NODELET_FATAL_STREAM("calibration: " << error.what());
       throw;
@@ -197,7 +237,6 @@ void StereoTrackerNodelet::onInit() {
   keyframe_publisher_ = node.advertise<stereo_fabmap_slam::Keyframe>("keyframes", 100);
   update_subscriber_ =
       node.subscribe("keyframe_updates", 100, &StereoTrackerNodelet::OnKeyframeUpdate, this);
-  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   if (options_.place_features) {
     relocalize_frame_client_ =
         node.serviceClient<stereo_fabmap_slam::RelocalizeFrame>("relocalize_frame", true);
@@ -271,14 +310,26 @@ void StereoTrackerNodelet::OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& l
   std::lock_guard<std::mutex> lock(mutex_);
   if (front_end_) return;  // the first pair defines the rectification
   try {
-    front_end_ = std::make_unique<pipeline::StereoFrontEnd>(
-        options_,
-        ros_conversions::RectifierFromCameraInfo(*left, *right, Eigen::Isometry3d::Identity()),
-        SteadyMilliseconds);
+    StartFrontEnd(ros_conversions::RectifierFromCameraInfo(
+        *left, *right, T_base_left_raw_.value_or(Eigen::Isometry3d::Identity())));
     front_end_->SkipIdsBelow(next_keyframe_id_, next_point_id_);
     NODELET_INFO("stereo model from camera_info: baseline %.3f m", front_end_->camera().baseline);
   } catch (const std::exception& error) {
     NODELET_WARN_THROTTLE(5, "camera_info pair unusable: %s", error.what());
+  }
+}
+
+void StereoTrackerNodelet::StartFrontEnd(const camera::StereoRectifier& rectifier) {
+  front_end_ = std::make_unique<pipeline::StereoFrontEnd>(options_, rectifier, SteadyMilliseconds);
+  frames_.emplace(rectifier.T_body_rectified_left());
+  odometry_builder_.emplace(*frames_, odom_frame_, base_frame_);
+  if (publish_tf_) {
+    geometry_msgs::TransformStamped mount;
+    mount.header.stamp = ros::Time(0);  // static: valid at every time
+    mount.header.frame_id = base_frame_;
+    mount.child_frame_id = camera_frame_;
+    mount.transform = ros_conversions::ToTransformMessage(frames_->T_base_camera());
+    static_tf_broadcaster_->sendTransform(mount);
   }
 }
 
@@ -344,23 +395,25 @@ void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_messa
 void StereoTrackerNodelet::Publish(const ros::Time& stamp, const odometry::TrackingResult& result) {
   if (result.state == odometry::TrackingState::kLost && !result.keyframe)
     return;  // no pose to give
-  const geometry_msgs::Pose pose = ros_conversions::ToPoseMessage(result.T_world_camera);
-  nav_msgs::Odometry odometry;
-  odometry.header.stamp = stamp;
-  odometry.header.frame_id = odom_frame_;
-  odometry.child_frame_id = camera_frame_;
-  odometry.pose.pose = pose;
+  // A loss, or a new piece of odometry after one, is not a motion to take a twist from.
+  const bool continues = result.state != odometry::TrackingState::kLost &&
+                         !(result.keyframe && result.keyframe->starts_new_map);
+  const nav_msgs::Odometry odometry =
+      odometry_builder_->Build(stamp, result.T_world_camera, result.covariance, continues);
   odometry_publisher_.publish(odometry);
 
-  geometry_msgs::TransformStamped transform;
-  transform.header = odometry.header;
-  transform.child_frame_id = camera_frame_;
-  transform.transform = ros_conversions::ToTransformMessage(result.T_world_camera);
-  tf_broadcaster_->sendTransform(transform);
+  if (publish_tf_) {
+    geometry_msgs::TransformStamped transform;
+    transform.header = odometry.header;
+    transform.child_frame_id = base_frame_;
+    transform.transform =
+        ros_conversions::ToTransformMessage(frames_->BaseInOdom(result.T_world_camera));
+    tf_broadcaster_->sendTransform(transform);
+  }
 
   if (result.keyframe) {
-    keyframe_publisher_.publish(
-        ros_conversions::ToKeyframeMessage(*result.keyframe, front_end_->camera(), odom_frame_));
+    keyframe_publisher_.publish(ros_conversions::ToKeyframeMessage(
+        frames_->KeyframeToOdom(*result.keyframe), front_end_->camera(), odom_frame_));
   }
 }
 
@@ -403,7 +456,7 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
   } else {
     map::Keyframe frame;
     frame.timestamp = stamp.toSec();
-    frame.T_world_camera = result.T_world_camera;
+    frame.T_world_camera = frames_->ToOdom(result.T_world_camera);
     frame.features = output.features;
     frame.map_point_ids.assign(frame.features.size(), -1);
     frame.place_descriptors =
@@ -435,7 +488,7 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
       if (call.response.success && call.response.map_pose_known) {
         const Eigen::Isometry3d T_map_odom =
             ros_conversions::FromPoseMessage(call.response.T_map_camera) *
-            result.T_world_camera.inverse();
+            frames_->ToOdom(result.T_world_camera).inverse();
         geometry_msgs::TransformStamped correction;
         correction.header.stamp = stamp;
         correction.header.frame_id = map_frame_;
@@ -515,7 +568,10 @@ bool StereoTrackerNodelet::OnRelocalize(stereo_fabmap_slam::Relocalize::Request&
   if (response.success) {
     response.pose.header.stamp = request_.stamp;
     response.pose.header.frame_id = map_frame_;
-    response.pose.pose = result.T_map_camera;
+    // The base's pose, what a robot's navigation wants. frames_ was set before the frame that
+    // answered was tracked, and that answer was handed over under request_mutex_.
+    response.pose.pose = ros_conversions::ToPoseMessage(
+        ros_conversions::FromPoseMessage(result.T_map_camera) * frames_->T_base_camera().inverse());
   }
   return true;
 }
@@ -525,7 +581,8 @@ void StereoTrackerNodelet::OnKeyframeUpdate(
   std::lock_guard<std::mutex> lock(mutex_);
   if (!front_end_) return;
   try {
-    front_end_->ApplyUpdate(ros_conversions::FromKeyframeUpdateMessage(*message));
+    front_end_->ApplyUpdate(
+        frames_->UpdateFromOdom(ros_conversions::FromKeyframeUpdateMessage(*message)));
   } catch (const std::exception& error) {
     NODELET_WARN_THROTTLE(5, "keyframe update ignored: %s", error.what());
   }

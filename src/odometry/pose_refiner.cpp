@@ -73,6 +73,14 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
       result.inliers += result.inlier[i] ? 1 : 0;
     }
   }
+  std::vector<geometry::ObservedPoint> inlier_points;
+  inlier_points.reserve(static_cast<std::size_t>(result.inliers));
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    if (!result.inlier[i]) continue;
+    inlier_points.push_back(
+        {result.T_camera_world * observations[i].world, observations[i].u_right >= 0});
+  }
+  result.covariance = geometry::StereoPoseCovariance(camera, inlier_points, options.sigma);
   return result;
 }
 

@@ -258,6 +258,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   }
   result.matches = static_cast<int>(matches.size());
   result.inliers = refined.inliers;
+  result.covariance = refined.covariance;
   const Eigen::Isometry3d T_world_camera = refined.T_camera_world.inverse();
 
   if (result.inliers < options_.min_inliers_weak) {

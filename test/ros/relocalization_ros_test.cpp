@@ -32,8 +32,6 @@
 #include <stereo_fabmap_slam/SetMode.h>
 
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/camera/camera_options.h"
-#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "test_support.h"
@@ -66,12 +64,9 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
                        &output),
             0)
       << output;
-  // Ground truth of the rectified left camera (the map frame is its pose at the first frame).
+  // Ground truth of the body (base_link; the map frame is its pose at the first frame).
   const datasets::EurocSequence asl = datasets::EurocSequence::Open(sequence);
-  const camera::StereoRectifier rectifier =
-      camera::StereoRectifier::FromCalibration(asl.calibration(), camera::RectificationOptions());
-  const evaluation::Trajectory truth =
-      evaluation::TransformToSensorFrame(asl.ground_truth(), rectifier.T_body_rectified_left());
+  const evaluation::Trajectory& truth = asl.ground_truth();
 
   std::mutex mutex;
   double first_stamp = -1, last_stamp = -1;
@@ -141,7 +136,8 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   ASSERT_TRUE(early_saved);
   EXPECT_TRUE(early.response.success) << early.response.message;
   ASSERT_GE(bag_time(), kCut + 3.0) << ReadTextFile(temp.path() + "/roslaunch.log");
-  // A relocalized pose against ground truth: the map frame is the camera at the first frame.
+  // A relocalized pose (of base_link) against ground truth: the map frame is the body at the
+  // first frame.
   const auto pose_error = [&](const geometry_msgs::PoseStamped& pose) {
     const Eigen::Isometry3d expected =
         PoseAt(truth, truth.front().timestamp).inverse() * PoseAt(truth, pose.header.stamp.toSec());

@@ -7,6 +7,7 @@
 
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/geometry/pose_covariance.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 #include "stereo_fabmap_slam/odometry/odometry_options.h"
@@ -24,6 +25,9 @@ struct PoseRefinement {
   Eigen::Isometry3d T_camera_world = Eigen::Isometry3d::Identity();
   std::vector<bool> inlier;  // per observation
   int inliers = 0;
+  // Of T_camera_world.inverse() (the camera in the world), from the final inliers and the
+  // options' pixel sigma: geometry::StereoPoseCovariance.
+  geometry::PoseCovariance covariance = geometry::PoseCovariance::Identity();
 };
 
 // A frame's key points matched to 3-D points (match.queryIdx: key point, match.trainIdx: point),

@@ -30,6 +30,9 @@ struct TrackingResult {
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
   int matches = 0;  // map points found in the frame
   int inliers = 0;  // of those, consistent with the pose
+  // Of T_world_camera (right perturbation, translation then rotation): how well this frame's
+  // inliers pin the pose down relative to the local map (geometry::StereoPoseCovariance).
+  geometry::PoseCovariance covariance = geometry::PoseCovariance::Identity();
   // The pose relative to a keyframe, so that the trajectory follows later keyframe corrections.
   std::int64_t reference_keyframe = -1;
   Eigen::Isometry3d T_keyframe_camera = Eigen::Isometry3d::Identity();
