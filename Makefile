@@ -3,6 +3,7 @@
 #   make test   install what is missing, build, run every test (gtest + rostest)
 #   make build  build only; every tool is then build/bin/<tool>
 #   make bench  benchmark figures for docs/benchmarks.md
+#   make screenshots  rviz pictures for docs/ and the README (installs rviz, xvfb, imagemagick)
 # Use the ROS side (roslaunch, rosrun, nodelets) after `source build/ws/devel/setup.bash`.
 SHELL := /bin/bash
 .DEFAULT_GOAL := build
@@ -38,7 +39,7 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_DEVEL_PREFIX=$(WS)/devel -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
 CMAKE_BUILD := cmake --build $(WS)/build --
 
-.PHONY: deps build test demo bench clean format vocabulary
+.PHONY: deps build test demo bench clean format vocabulary screenshots
 
 deps:
 	@missing=$$(for p in $(DEBIAN_PACKAGES); do \
@@ -88,6 +89,25 @@ demo: build
 # Speed and accuracy figures (docs/benchmarks.md records them); never part of `make test`.
 bench: build
 	bash scripts/bench.sh
+
+# rviz with the shipped config under Xvfb, on the EuRoC subset and on the rendered loop.
+SCREENSHOT_PACKAGES := rviz xvfb imagemagick
+SCREENSHOTS := output/screenshots
+screenshots: build
+	@missing=$$(for p in $(SCREENSHOT_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; \
+	  done | tr '\n' ' '); \
+	if [ -n "$${missing// }" ]; then \
+	  $(SUDO) apt-get update -q && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
+	fi
+	mkdir -p $(SCREENSHOTS)
+	$(BIN)/euroc_to_bag $(STEREO_FABMAP_SLAM_DATA)/euroc/MH01_first10s $(SCREENSHOTS)/MH01_first10s.bag
+	rm -rf $(SCREENSHOTS)/loop
+	$(BIN)/make_synthetic_sequence --out $(SCREENSHOTS)/loop --route loop --seconds 40 --seed 1 > /dev/null
+	bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/MH01_first10s.bag docs/rviz_euroc_mh01.png
+	bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/loop/sequence.bag docs/rviz_synthetic_loop.png \
+	  $(SCREENSHOTS)/loop/stereo_calibration.yaml
 
 clean:
 	rm -rf build

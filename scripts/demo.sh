@@ -56,16 +56,17 @@ launch_pid=
 trap cleanup EXIT
 until rosparam list > /dev/null 2>&1; do sleep 0.2; done
 
-echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector, rosbag play $bag"
+echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector + Visualizer, rosbag play $bag"
 rosbag record -q -O "$OUT/recorded.bag" /odometry /keyframes /keyframe_updates /loop_edges /map_graph \
   > /dev/null 2>&1 &
 recorder_pid=$!
 sleep 1
 graph_start=$SECONDS
-if [ "${RVIZ:-0}" = 1 ]; then rviz -d config/stereo_fabmap_slam.rviz > "$OUT/rviz.log" 2>&1 & fi
+rviz=false
+[ "${RVIZ:-0}" = 1 ] && rviz=true
 # The graph stays up after the bag (exit_at_end:=false) for the relocalize call below.
 roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$RATE" calibration:="$calibration" \
-  exit_at_end:=false > "$OUT/roslaunch.log" 2>&1 &
+  exit_at_end:=false rviz:=$rviz > "$OUT/roslaunch.log" 2>&1 &
 launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 deadline=$((SECONDS + 60 + 3 * duration))

@@ -79,6 +79,12 @@ void WriteStereoCalibrationYaml(const StereoCalibration& calibration, const std:
   WriteCamera(calibration.left, "left camera", "  ", out);
   out << "\nright:\n";
   WriteCamera(calibration.right, "right camera", "  ", out);
+  if (!calibration.T_body_base.isApprox(Eigen::Isometry3d::Identity(), 1e-12)) {
+    out << "\n# The robot base (x forward, y left, z up) in the body frame.\nT_body_base:\n"
+        << "  cols: 4\n  rows: 4\n  data: [";
+    const Eigen::Matrix4d T = calibration.T_body_base.matrix();
+    for (int i = 0; i < 16; ++i) out << T(i / 4, i % 4) << (i < 15 ? ", " : "]\n");
+  }
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
@@ -155,6 +161,9 @@ StereoCalibration ReadStereoCalibrationYaml(const std::string& path) {
   StereoCalibration stereo;
   stereo.left = ParseCameraCalibration(file, file.Child(file.root(), "left"));
   stereo.right = ParseCameraCalibration(file, file.Child(file.root(), "right"));
+  if (file.Has(file.root(), "T_body_base")) {
+    stereo.T_body_base = ParseTransform(file, file.root(), "T_body_base");
+  }
   try {
     stereo.Validate();
   } catch (const std::invalid_argument& error) {

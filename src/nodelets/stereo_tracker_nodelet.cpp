@@ -16,6 +16,9 @@
 
 #include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/TransformStamped.h>
+#include <image_transport/camera_common.h>
+#include <image_transport/image_transport.h>
+#include <image_transport/subscriber_filter.h>
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/sync_policies/exact_time.h>
@@ -43,6 +46,7 @@
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 #include "stereo_fabmap_slam/relocalization/relocalization_options.h"
+#include "tracking_image.h"
 
 namespace stereo_fabmap_slam {
 
@@ -62,7 +66,9 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   void onInit() override;
   void LoadOptions(const ros::NodeHandle& private_node);
   // Sets the front end and, from its rectified camera's mounting, the frame conventions; once.
-  void StartFrontEnd(const camera::StereoRectifier& rectifier);
+  // T_base_body: the rectifier's body frame in the base frame.
+  void StartFrontEnd(const camera::StereoRectifier& rectifier,
+                     const Eigen::Isometry3d& T_base_body);
   void OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& left,
                     const sensor_msgs::CameraInfoConstPtr& right);
   void OnImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
@@ -92,14 +98,17 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   int queue_size_ = 10;
   std::atomic<std::uint64_t> left_images_{0}, right_images_{0}, pairs_{0};
 
-  message_filters::Subscriber<Image> left_subscriber_, right_subscriber_;
+  // Images through image_transport: ~image_transport (raw by default) picks the transport, so a
+  // compressed stream works where its plugin is installed.
+  std::unique_ptr<image_transport::ImageTransport> image_transport_;
+  image_transport::SubscriberFilter left_subscriber_, right_subscriber_;
   message_filters::Subscriber<sensor_msgs::CameraInfo> left_info_subscriber_,
       right_info_subscriber_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproximatePolicy>> approximate_sync_;
   std::unique_ptr<message_filters::Synchronizer<InfoPolicy>> info_sync_;
   ros::Subscriber update_subscriber_, graph_subscriber_;
-  ros::Publisher odometry_publisher_, keyframe_publisher_;
+  ros::Publisher odometry_publisher_, keyframe_publisher_, tracking_image_publisher_;
   ros::ServiceClient relocalize_frame_client_;
   ros::ServiceServer relocalize_service_;
   ros::CallbackQueue service_queue_;
@@ -220,14 +229,24 @@ void StereoTrackerNodelet::onInit() {
         calibration.left.T_body_camera = move * calibration.left.T_body_camera;
         calibration.right.T_body_camera = move * calibration.right.T_body_camera;
       }
-      StartFrontEnd(camera::StereoRectifier::FromCalibration(calibration, rectification_options_));
+      // The calibration's body is the base unless it says where the base is (T_body_base);
+      // ~base_to_camera places the camera on the base directly.
+      StartFrontEnd(
+          camera::StereoRectifier::FromCalibration(calibration, rectification_options_),
+          T_base_left_raw_ ? Eigen::Isometry3d::Identity() : calibration.T_body_base.inverse());
     } catch (const std::exception& error) {
       NODELET_FATAL_STREAM("calibration: " << error.what());
       throw;
     }
   } else {
-    left_info_subscriber_.subscribe(node, "left/camera_info", queue_size);
-    right_info_subscriber_.subscribe(node, "right/camera_info", queue_size);
+    // Camera info follows its image topic (as image_transport's CameraSubscriber does): one
+    // remap of left/image_raw moves both.
+    left_info_subscriber_.subscribe(
+        node, image_transport::getCameraInfoTopic(node.resolveName("left/image_raw")), queue_size);
+    right_info_subscriber_.subscribe(
+        node, image_transport::getCameraInfoTopic(node.resolveName("right/image_raw")), queue_size);
+    NODELET_INFO_STREAM("calibration from " << left_info_subscriber_.getTopic() << " + "
+                                            << right_info_subscriber_.getTopic());
     info_sync_ = std::make_unique<message_filters::Synchronizer<InfoPolicy>>(
         InfoPolicy(queue_size), left_info_subscriber_, right_info_subscriber_);
     info_sync_->registerCallback(&StereoTrackerNodelet::OnCameraInfo, this);
@@ -235,6 +254,7 @@ void StereoTrackerNodelet::onInit() {
 
   odometry_publisher_ = node.advertise<nav_msgs::Odometry>("odometry", 10);
   keyframe_publisher_ = node.advertise<stereo_fabmap_slam::Keyframe>("keyframes", 100);
+  tracking_image_publisher_ = node.advertise<sensor_msgs::Image>("tracking_image", 2);
   update_subscriber_ =
       node.subscribe("keyframe_updates", 100, &StereoTrackerNodelet::OnKeyframeUpdate, this);
   if (options_.place_features) {
@@ -285,8 +305,10 @@ void StereoTrackerNodelet::onInit() {
     service_spinner_->start();
   }
 
-  left_subscriber_.subscribe(node, "left/image_raw", queue_size);
-  right_subscriber_.subscribe(node, "right/image_raw", queue_size);
+  image_transport_ = std::make_unique<image_transport::ImageTransport>(node);
+  const image_transport::TransportHints hints("raw", ros::TransportHints(), private_node);
+  left_subscriber_.subscribe(*image_transport_, "left/image_raw", queue_size, hints);
+  right_subscriber_.subscribe(*image_transport_, "right/image_raw", queue_size, hints);
   left_subscriber_.registerCallback(
       [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(&left_images_); });
   right_subscriber_.registerCallback(
@@ -311,7 +333,8 @@ void StereoTrackerNodelet::OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& l
   if (front_end_) return;  // the first pair defines the rectification
   try {
     StartFrontEnd(ros_conversions::RectifierFromCameraInfo(
-        *left, *right, T_base_left_raw_.value_or(Eigen::Isometry3d::Identity())));
+                      *left, *right, T_base_left_raw_.value_or(Eigen::Isometry3d::Identity())),
+                  Eigen::Isometry3d::Identity());
     front_end_->SkipIdsBelow(next_keyframe_id_, next_point_id_);
     NODELET_INFO("stereo model from camera_info: baseline %.3f m", front_end_->camera().baseline);
   } catch (const std::exception& error) {
@@ -319,9 +342,10 @@ void StereoTrackerNodelet::OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& l
   }
 }
 
-void StereoTrackerNodelet::StartFrontEnd(const camera::StereoRectifier& rectifier) {
+void StereoTrackerNodelet::StartFrontEnd(const camera::StereoRectifier& rectifier,
+                                         const Eigen::Isometry3d& T_base_body) {
   front_end_ = std::make_unique<pipeline::StereoFrontEnd>(options_, rectifier, SteadyMilliseconds);
-  frames_.emplace(rectifier.T_body_rectified_left());
+  frames_.emplace(T_base_body * rectifier.T_body_rectified_left());
   odometry_builder_.emplace(*frames_, odom_frame_, base_frame_);
   if (publish_tf_) {
     geometry_msgs::TransformStamped mount;
@@ -386,6 +410,11 @@ void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_messa
       NODELET_WARN_THROTTLE(2, "tracking lost: %s", output.tracking.reason.c_str());
     }
     Publish(stamp, output.tracking);
+    // Drawn only for someone who looks: a colour copy of every frame is not free.
+    if (tracking_image_publisher_.getNumSubscribers() > 0) {
+      tracking_image_publisher_.publish(ros_visualization::TrackingImageMessage(
+          front_end_->last_rectified_left(), output.tracking, stamp, camera_frame_));
+    }
     if (options_.place_features) RelocalizeIfDue(stamp, output);
   } catch (const std::exception& error) {
     NODELET_WARN_THROTTLE(5, "frame skipped: %s", error.what());

@@ -188,8 +188,31 @@ void Tracker::Remember(double timestamp, const Eigen::Isometry3d& T_world_camera
   }
 }
 
+namespace {
+
+// Fills the result's key point classes; `inlier[k]` says whether matched key point
+// `matched[k]` was an inlier.
+void ClassifyKeypoints(const features::StereoFeatures& features, const std::vector<int>& matched,
+                       const std::vector<bool>& inlier, TrackingResult* result) {
+  std::vector<bool> is_matched(features.size(), false);
+  for (std::size_t k = 0; k < matched.size(); ++k) {
+    const std::size_t i = static_cast<std::size_t>(matched[k]);
+    is_matched[i] = true;
+    (inlier[k] ? result->inlier_pixels : result->outlier_pixels)
+        .push_back(features.keypoints[i].pt);
+  }
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (!is_matched[i] && features.HasDepth(i)) {
+      result->untracked_pixels.push_back(features.keypoints[i].pt);
+    }
+  }
+}
+
+}  // namespace
+
 TrackingResult Tracker::StartOver(double timestamp, features::StereoFeatures features,
                                   const Eigen::Isometry3d& predicted, TrackingResult result) {
+  ClassifyKeypoints(features, {}, {}, &result);
   StartMap(timestamp, std::move(features), predicted, &result);
   if (!result.keyframe) result.state = TrackingState::kLost;
   Remember(timestamp, predicted, &result);
@@ -253,9 +276,12 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   const PoseRefinement refined =
       RefinePose(observations, camera_, ransac.T_camera_world, options_.refinement);
   std::vector<Match> inlier_matches;
+  std::vector<int> matched_keypoints;
   for (std::size_t k = 0; k < matches.size(); ++k) {
     if (refined.inlier[k]) inlier_matches.push_back(matches[k]);
+    matched_keypoints.push_back(matches[k].keypoint);
   }
+  ClassifyKeypoints(features, matched_keypoints, refined.inlier, &result);
   result.matches = static_cast<int>(matches.size());
   result.inliers = refined.inliers;
   result.covariance = refined.covariance;

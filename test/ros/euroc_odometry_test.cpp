@@ -71,12 +71,14 @@ TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
   ros::WallDuration(1.0).sleep();
   spinner.stop();
 
-  // The camera's mounting: the rectified left camera in the body frame of the calibration.
+  // The camera's mounting: the rectified left camera in the base, which sits at the body (IMU)
+  // origin, level (T_body_base of the calibration).
+  const camera::StereoCalibration calibration = camera::ReadStereoCalibrationYaml(
+      std::string(STEREO_FABMAP_SLAM_REPO_ROOT) + "/config/euroc_stereo.yaml");
+  const Eigen::Isometry3d T_base_body = calibration.T_body_base.inverse();
   const Eigen::Isometry3d T_base_camera =
-      camera::StereoRectifier::FromCalibration(
-          camera::ReadStereoCalibrationYaml(std::string(STEREO_FABMAP_SLAM_REPO_ROOT) +
-                                            "/config/euroc_stereo.yaml"),
-          camera::RectificationOptions())
+      T_base_body *
+      camera::StereoRectifier::FromCalibration(calibration, camera::RectificationOptions())
           .T_body_rectified_left();
   std::string tf_error;
   ASSERT_TRUE(tf_buffer.canTransform("base_link", "camera_optical", ros::Time(0), &tf_error))
@@ -133,8 +135,8 @@ TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
     EXPECT_LT(std::abs(nearest->timestamp - stamp_ns * 1e-9), 0.005);
     return nearest->pose;
   };
-  const Eigen::Isometry3d true_motion =
-      ground_truth_at(first->first).inverse() * ground_truth_at(last->first);
+  const Eigen::Isometry3d true_motion = T_base_body * ground_truth_at(first->first).inverse() *
+                                        ground_truth_at(last->first) * T_base_body.inverse();
   const double ground_truth_difference =
       (online_motion.translation() - true_motion.translation()).norm();
   RecordProperty("motion_m", std::to_string(true_motion.translation().norm()));

@@ -1,19 +1,28 @@
 // The StereoTracker, Backend and LoopDetector nodelets on a rendered route that returns to its
 // start: at least one loop edge, a map -> odom transform on tf, a map_graph with a loop edge,
-// and detect_loop answering a call (and refusing a bad one).
+// and detect_loop answering a call (and refusing a bad one). The Visualizer draws the same
+// graph: as many keyframe frusta and loop edges as a map_graph published, a corrected path and
+// a cloud in the map frame; the tracker's tracking_image shows tracked points.
 #include <atomic>
 #include <cstdlib>
 #include <mutex>
+#include <set>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include <gtest/gtest.h>
+#include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
 #include <stereo_fabmap_slam/LoopEdge.h>
 #include <stereo_fabmap_slam/MapGraph.h>
 #include <tf2_msgs/TFMessage.h>
+#include <visualization_msgs/MarkerArray.h>
 
+#include "map_markers.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -33,6 +42,10 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
   std::mutex mutex;
   std::vector<stereo_fabmap_slam::LoopEdge> loops;
   int map_to_odom = 0, graph_loop_edges = 0;
+  std::set<std::pair<std::size_t, int>> graph_counts;  // (keyframes, loop edges) of each graph
+  std::size_t last_graph_keyframes = 0, path_poses = 0, cloud_points = 0;
+  std::vector<std::pair<std::size_t, int>> drawn;
+  int tracking_images = 0;
   ros::NodeHandle node;
   const ros::Subscriber loop_subscriber = node.subscribe<stereo_fabmap_slam::LoopEdge>(
       "/loop_edges", 1000, [&](const stereo_fabmap_slam::LoopEdgeConstPtr& message) {
@@ -56,6 +69,46 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
           count += edge.type == stereo_fabmap_slam::MapGraphEdge::LOOP ? 1 : 0;
         }
         graph_loop_edges = std::max(graph_loop_edges, count);
+        graph_counts.insert({message->keyframe_ids.size(), count});
+        last_graph_keyframes = message->keyframe_ids.size();
+      });
+  // What the Visualizer draws: (keyframe frusta, loop edges) of each marker array.
+  const auto points_of = [](const visualization_msgs::MarkerArray& array, const char* name) {
+    for (const auto& marker : array.markers) {
+      if (marker.ns == name && marker.action == visualization_msgs::Marker::ADD) {
+        return marker.points.size();
+      }
+    }
+    return std::size_t{0};
+  };
+  const ros::Subscriber marker_subscriber = node.subscribe<visualization_msgs::MarkerArray>(
+      "/map_markers", 100, [&](const visualization_msgs::MarkerArrayConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        const std::size_t frustum_points =
+            points_of(*message, ros_visualization::kKeyframesNamespace);
+        EXPECT_EQ(frustum_points % (2 * ros_visualization::kFrustumSegments), 0u);
+        drawn.push_back(
+            {frustum_points / (2 * ros_visualization::kFrustumSegments),
+             static_cast<int>(points_of(*message, ros_visualization::kLoopEdgesNamespace) / 2)});
+        for (const auto& marker : message->markers) EXPECT_EQ(marker.header.frame_id, "map");
+      });
+  const ros::Subscriber path_subscriber =
+      node.subscribe<nav_msgs::Path>("/map_path", 10, [&](const nav_msgs::PathConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        EXPECT_EQ(message->header.frame_id, "map");
+        path_poses = message->poses.size();
+      });
+  const ros::Subscriber cloud_subscriber = node.subscribe<sensor_msgs::PointCloud2>(
+      "/map_cloud", 10, [&](const sensor_msgs::PointCloud2ConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        EXPECT_EQ(message->header.frame_id, "map");
+        cloud_points = std::max<std::size_t>(cloud_points, message->width * message->height);
+      });
+  const ros::Subscriber image_subscriber = node.subscribe<sensor_msgs::Image>(
+      "/tracking_image", 10, [&](const sensor_msgs::ImageConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        EXPECT_EQ(message->encoding, "bgr8");
+        ++tracking_images;
       });
   ros::AsyncSpinner spinner(2);
   spinner.start();
@@ -85,11 +138,11 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
       ros::WallDuration(0.2).sleep();
     }
   });
-  const int status =
-      std::system(("roslaunch --wait stereo_fabmap_slam euroc_bag.launch bag:=" + sequence +
-                   "/sequence.bag calibration:=" + sequence + "/stereo_calibration.yaml > " +
-                   temp.path() + "/roslaunch.log 2>&1")
-                      .c_str());
+  const int status = std::system(
+      ("roslaunch --wait stereo_fabmap_slam euroc_bag.launch exit_at_end:=true bag:=" + sequence +
+       "/sequence.bag calibration:=" + sequence + "/stereo_calibration.yaml > " + temp.path() +
+       "/roslaunch.log 2>&1")
+          .c_str());
   done = true;
   caller.join();
   ros::WallDuration(0.5).sleep();
@@ -106,6 +159,21 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
     EXPECT_NE(loop.query_id, loop.match_id);
     EXPECT_GE(loop.inliers, 40);
   }
+
+  // Every marker array drew one of the published graphs, and the last one nearly the last graph
+  // (the Visualizer refreshes at 5 Hz; the launch may end between a graph and its drawing).
+  RecordProperty("marker_arrays", static_cast<int>(drawn.size()));
+  ASSERT_FALSE(drawn.empty());
+  for (const auto& counts : drawn) {
+    EXPECT_EQ(graph_counts.count(counts), 1u)
+        << counts.first << " keyframes, " << counts.second << " loop edges drawn";
+  }
+  RecordProperty("keyframes_drawn", static_cast<int>(drawn.back().first));
+  EXPECT_GE(drawn.back().first + 3, last_graph_keyframes);
+  EXPECT_GE(drawn.back().second, 1) << "the loop edge is drawn";
+  EXPECT_GT(path_poses, 100u);  // 34 s at 20 Hz: 680 frames
+  EXPECT_GT(cloud_points, 1000u);
+  EXPECT_GT(tracking_images, 10);
   ASSERT_TRUE(unknown_called);
   EXPECT_FALSE(unknown.response.success);
   EXPECT_NE(unknown.response.message.find("not in the map"), std::string::npos)

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <opencv2/core.hpp>
 
 #include "ros_conversions.h"
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "test_support.h"
 
@@ -27,8 +29,20 @@ TEST(EurocToBag, V101MicroReadsBackFrameForFrame) {
 
   rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
   std::size_t images[2] = {0, 0};
-  std::size_t poses = 0;
+  std::size_t poses = 0, infos[2] = {0, 0};
+  sensor_msgs::CameraInfoConstPtr first_info[2];
   for (const rosbag::MessageInstance& instance : rosbag::View(bag)) {
+    if (instance.getTopic() == "/cam0/camera_info" || instance.getTopic() == "/cam1/camera_info") {
+      const int side = instance.getTopic() == "/cam0/camera_info" ? 0 : 1;
+      const auto info = instance.instantiate<sensor_msgs::CameraInfo>();
+      ASSERT_TRUE(info);
+      const std::size_t index = infos[side]++;
+      ASSERT_LT(index, sequence.size());
+      EXPECT_EQ(ros_conversions::ToNanoseconds(info->header.stamp),
+                sequence.frames()[index].timestamp_ns);
+      if (index == 0) first_info[side] = info;
+      continue;
+    }
     if (instance.getTopic() == "/ground_truth") {
       const auto pose = instance.instantiate<geometry_msgs::PoseStamped>();
       ASSERT_TRUE(pose);
@@ -58,6 +72,19 @@ TEST(EurocToBag, V101MicroReadsBackFrameForFrame) {
   EXPECT_EQ(images[0], 95u);
   EXPECT_EQ(images[1], 95u);
   EXPECT_EQ(poses, sequence.ground_truth().size());
+  // The camera_info pair describes the same rectified stereo camera as the calibration.
+  EXPECT_EQ(infos[0], 95u);
+  EXPECT_EQ(infos[1], 95u);
+  ASSERT_TRUE(first_info[0] && first_info[1]);
+  const geometry::StereoCamera from_info =
+      ros_conversions::RectifierFromCameraInfo(*first_info[0], *first_info[1],
+                                               Eigen::Isometry3d::Identity())
+          .camera();
+  const geometry::StereoCamera from_calibration =
+      camera::StereoRectifier::FromCalibration(sequence.calibration()).camera();
+  EXPECT_NEAR(from_info.fx, from_calibration.fx, 1e-9);
+  EXPECT_NEAR(from_info.cx, from_calibration.cx, 1e-9);
+  EXPECT_NEAR(from_info.baseline, from_calibration.baseline, 1e-9);
 
   // What `rosbag info` shows a user (the Python tool, no master needed).
   ASSERT_EQ(RunCommand("rosbag info --yaml " + bag_path + " 2>&1", &output), 0) << output;

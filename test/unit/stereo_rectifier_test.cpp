@@ -119,6 +119,41 @@ TEST_F(RectificationOnEuroc, ConfigFileGivesTheSameModelAsSensorYaml) {
   EXPECT_TRUE(other.T_body_rectified_left().isApprox(rectifier_.T_body_rectified_left(), 1e-12));
 }
 
+// ROS's base_link for EuRoC (T_body_base in the config): level, looking where the cameras look.
+// At the first ground-truth pose of both sequences (MH01 on the floor, V101 hovering) the
+// base's z axis is within 5 degrees of the world's up (measured: 1.5 and 3), and the left camera
+// looks 20 degrees below the base's x axis (its mounting), within 3 degrees.
+TEST(EurocCalibration, BaseFrameIsLevelAndLooksForward) {
+  const camera::StereoCalibration calibration =
+      camera::ReadStereoCalibrationYaml(RepositoryRoot() + "/config/euroc_stereo.yaml");
+  for (const char* name : {"MH01_first10s", "V101_micro"}) {
+    const datasets::EurocSequence sequence = datasets::EurocSequence::Open(EurocSequencePath(name));
+    ASSERT_TRUE(sequence.has_ground_truth());
+    const Eigen::Matrix3d R_world_base =
+        sequence.ground_truth().front().pose.rotation() * calibration.T_body_base.rotation();
+    const double tilt_deg = std::acos((R_world_base * Eigen::Vector3d::UnitZ()).z()) * 180.0 / M_PI;
+    RecordProperty(std::string("base_tilt_deg_") + name, std::to_string(tilt_deg));
+    EXPECT_LT(tilt_deg, 5.0) << name;
+  }
+  const Eigen::Isometry3d T_base_camera =
+      calibration.T_body_base.inverse() *
+      StereoRectifier::FromCalibration(calibration).T_body_rectified_left();
+  const Eigen::Vector3d optical_axis = T_base_camera.rotation() * Eigen::Vector3d::UnitZ();
+  const double below_deg = -std::asin(optical_axis.z()) * 180.0 / M_PI;
+  EXPECT_NEAR(below_deg, 20.0, 3.0) << optical_axis.transpose();
+  EXPECT_NEAR(optical_axis.y(), 0.0, std::sin(3.0 * M_PI / 180.0));
+  // A file without T_body_base: the body is the base.
+  TemporaryDirectory temp;
+  camera::StereoCalibration plain = calibration;
+  plain.T_body_base = Eigen::Isometry3d::Identity();
+  camera::WriteStereoCalibrationYaml(plain, temp.path() + "/plain.yaml");
+  EXPECT_TRUE(camera::ReadStereoCalibrationYaml(temp.path() + "/plain.yaml")
+                  .T_body_base.isApprox(Eigen::Isometry3d::Identity(), 1e-12));
+  camera::WriteStereoCalibrationYaml(calibration, temp.path() + "/euroc.yaml");
+  EXPECT_TRUE(camera::ReadStereoCalibrationYaml(temp.path() + "/euroc.yaml")
+                  .T_body_base.isApprox(calibration.T_body_base, 1e-12));
+}
+
 TEST_F(RectificationOnEuroc, RejectsImagesOfTheWrongSizeOrType) {
   const cv::Mat small(240, 376, CV_8UC1, cv::Scalar(0));
   const cv::Mat good(480, 752, CV_8UC1, cv::Scalar(0));

@@ -27,6 +27,10 @@ struct CameraCalibration {
 struct StereoCalibration {
   CameraCalibration left;
   CameraCalibration right;
+  // The robot's base frame (REP-103: x forward, y left, z up) in the body frame T_BS refers to,
+  // for ROS's base_link; optional (identity: the body is the base). EuRoC's body is its IMU,
+  // x up and z forward, so its file gives the rotation to a level base at the IMU.
+  Eigen::Isometry3d T_body_base = Eigen::Isometry3d::Identity();
 
   // Transform taking points from the left camera frame to the right camera frame.
   Eigen::Isometry3d T_right_left() const;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/core/types.hpp>
 
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
@@ -37,6 +38,10 @@ struct TrackingResult {
   std::int64_t reference_keyframe = -1;
   Eigen::Isometry3d T_keyframe_camera = Eigen::Isometry3d::Identity();
   std::optional<map::Keyframe> keyframe;  // set if this frame became a keyframe
+  // The frame's key points by what tracking made of them, for display (rectified left image):
+  // matched to map points and consistent with the pose; matched but rejected as outliers; the
+  // others with stereo depth (the new points of a keyframe, candidates otherwise).
+  std::vector<cv::Point2f> inlier_pixels, outlier_pixels, untracked_pixels;
 };
 
 // Frame-to-map tracking: predicts the pose with a constant-velocity model, finds local map points

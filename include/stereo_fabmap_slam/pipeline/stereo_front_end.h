@@ -79,6 +79,8 @@ class StereoFrontEnd {
   }
 
   const geometry::StereoCamera& camera() const { return rectifier_.camera(); }
+  // The last processed frame's rectified left image (shared, not copied).
+  const cv::Mat& last_rectified_left() const { return last_left_; }
   int descriptor_norm() const { return extractor_.descriptor_norm(); }
   double max_match_distance() const { return extractor_.max_match_distance(); }
 

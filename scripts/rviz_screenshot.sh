@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# Plays a bag through launch/euroc_bag.launch with rviz:=true (config/stereo_fabmap_slam.rviz)
+# under a virtual X server, and saves a screenshot of rviz once the bag has ended: what a user
+# sees before installing (docs/ and the README show these).
+#   scripts/rviz_screenshot.sh BAG OUT.png [CALIBRATION.yaml] [roslaunch arg:=value ...]
+# Needs `make build` and the packages rviz, xvfb and imagemagick (`make screenshots` installs
+# them and makes the pictures in docs/).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH=/usr/bin:$PATH
+if [ $# -lt 2 ]; then
+  echo "usage: $0 BAG OUT.png [CALIBRATION.yaml] [roslaunch arg:=value ...]" >&2
+  exit 2
+fi
+if [ -z "${RVIZ_SCREENSHOT_IN_XVFB:-}" ]; then
+  for tool in rviz xvfb-run import; do
+    command -v "$tool" > /dev/null || {
+      echo "$0: '$tool' is missing: apt-get install rviz xvfb imagemagick (or make screenshots)" >&2
+      exit 1
+    }
+  done
+  RVIZ_SCREENSHOT_IN_XVFB=1 exec xvfb-run -a -s "-screen 0 1440x900x24" "$0" "$@"
+fi
+bag=$(realpath "$1")
+out=$2
+calibration=$(realpath "${3:-config/euroc_stereo.yaml}")
+shift 2
+[ $# -gt 0 ] && shift
+[ -f "$bag" ] || { echo "$0: no bag at $bag" >&2; exit 1; }
+log_dir=$(mktemp -d)
+
+# A private master on a free port, as the demo does.
+set +u; source build/ws/devel/setup.bash; set -u
+port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI=http://127.0.0.1:$port ROS_HOME=$log_dir
+roscore -p "$port" > "$log_dir/roscore.log" 2>&1 &
+roscore_pid=$!
+launch_pid=
+cleanup() {
+  [ -n "$launch_pid" ] && kill -INT "$launch_pid" 2> /dev/null || true
+  kill "$roscore_pid" 2> /dev/null || true
+  wait 2> /dev/null || true
+}
+trap cleanup EXIT
+until rosparam list > /dev/null 2>&1; do sleep 0.2; done
+
+roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$bag" calibration:="$calibration" rviz:=true \
+  delay:=6 "$@" > "$log_dir/roslaunch.log" 2>&1 &
+launch_pid=$!
+duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
+deadline=$((SECONDS + 90 + 3 * duration))
+echo "playing $bag ($duration s) with rviz; logs in $log_dir"
+until rosnode list 2> /dev/null | grep -q '^/bag_player$'; do
+  [ $SECONDS -lt $deadline ] && kill -0 "$launch_pid" 2> /dev/null || {
+    echo "$0: the ROS graph failed; see $log_dir/roslaunch.log" >&2; exit 1; }
+  sleep 0.5
+done
+missing=0
+while [ $missing -lt 3 ]; do
+  [ $SECONDS -lt $deadline ] || { echo "$0: the bag did not end in time" >&2; exit 1; }
+  if rosnode list 2> /dev/null | grep -q '^/bag_player$'; then missing=0; else missing=$((missing + 1)); fi
+  sleep 0.5
+done
+sleep 4  # the Visualizer's last refresh and rviz's next frames
+import -window root "$out"
+echo "saved $out"
