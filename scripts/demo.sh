@@ -101,11 +101,14 @@ wait "$launch_pid" 2> /dev/null || true
 
 echo "== evaluating against ground truth"
 /usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/odometry.txt" \
-  "$OUT/keyframes.txt" "$OUT/trajectory.txt" "$OUT/loops.txt" > "$OUT/topics.txt"
-gt=(--gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" --gt-to-camera "$SEQUENCE/mav0/cam0/sensor.yaml")
+  "$OUT/keyframes.txt" "$OUT/trajectory.txt" "$OUT/loops.txt" "$OUT/relocalizations.txt" \
+  > "$OUT/topics.txt"
+# The odometry is the base's (REP-105 base_link): the ground truth moves to it.
+gt=(--gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" --gt-to-base "$calibration")
 "$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/odometry.txt" > "$OUT/evaluation_odometry.txt"
 "$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/trajectory.txt" --keyframes "$OUT/keyframes.txt" \
-  --loops "$OUT/loops.txt" --plot "$OUT/trajectory.png" > "$OUT/evaluation.txt"
+  --loops "$OUT/loops.txt" --relocalizations "$OUT/relocalizations.txt" --plot "$OUT/trajectory.png" \
+  > "$OUT/evaluation.txt"
 loops_present="unknown (real data)"
 if [ -f "$SEQUENCE/mav0/synthetic.yaml" ]; then
   loops_present=$(sed -n 's/^revisits: \[\(.*\)\]/\1/p' "$SEQUENCE/mav0/synthetic.yaml" | awk -F, 'NF == 0 {print 0} NF > 0 {print NF}')

@@ -2,13 +2,15 @@
 """Writes the trajectories of a recorded bag as TUM files and prints the message counts of every
 topic. For make demo:
 
-  odometry_bag_to_tum.py IN.bag ODOMETRY.txt KEYFRAMES.txt [MAP.txt LOOPS.txt]
+  odometry_bag_to_tum.py IN.bag ODOMETRY.txt KEYFRAMES.txt [MAP.txt LOOPS.txt [RELOCALIZATIONS.txt]]
 
 ODOMETRY.txt: the nav_msgs/Odometry poses (odom frame). KEYFRAMES.txt: the last pose of every
 keyframe, in the map frame of the last /map_graph when there is one (else odom, after the
 backend's updates). MAP.txt: every odometry pose moved into the map frame by its keyframe's
 final correction, T_map_kf * T_odom_kf^-1 * T_odom_camera (the trajectory after loop closing).
-LOOPS.txt: one line "query_time match_time" per /loop_edges message."""
+LOOPS.txt: one line "query_time match_time" per /loop_edges message. RELOCALIZATIONS.txt: the
+same for every RELOCALIZATION edge of the last /map_graph (a piece of odometry found in the map).
+The odometry is the base's (base_link), the keyframes are cameras."""
 import sys
 
 import rosbag
@@ -60,9 +62,13 @@ def write_tum(path, entries):
             out.write(tum_line(stamp, pose))
 
 
-def main(bag_path, odometry_path, keyframes_path, map_path=None, loops_path=None):
+RELOCALIZATION_EDGE = 2  # stereo_fabmap_slam/MapGraphEdge.RELOCALIZATION
+
+
+def main(bag_path, odometry_path, keyframes_path, map_path=None, loops_path=None,
+         relocalizations_path=None):
     counts, odometry, keyframes, loops = {}, [], {}, []  # keyframes: id -> [stamp, odom pose]
-    map_poses = {}
+    map_poses, relocalizations = {}, []
     with rosbag.Bag(bag_path) as bag:
         for name, message, _ in bag.read_messages():
             counts[name] = counts.get(name, 0) + 1
@@ -77,6 +83,9 @@ def main(bag_path, odometry_path, keyframes_path, map_path=None, loops_path=None
             elif name == "/map_graph":
                 map_poses = {kf_id: pose_tuple(pose)
                              for kf_id, pose in zip(message.keyframe_ids, message.keyframe_poses)}
+                # The edge's "to" keyframe is the piece that was found, "from" the map's.
+                relocalizations = [(edge.to_id, edge.from_id) for edge in message.edges
+                                   if edge.type == RELOCALIZATION_EDGE]
             elif name == "/loop_edges":
                 loops.append((message.query_id, message.match_id))
     write_tum(odometry_path, odometry)
@@ -97,6 +106,12 @@ def main(bag_path, odometry_path, keyframes_path, map_path=None, loops_path=None
         with open(loops_path, "w") as out:
             out.write("# query_time match_time\n")
             for query, match in loops:
+                if query in keyframes and match in keyframes:
+                    out.write(f"{keyframes[query][0]:.9f} {keyframes[match][0]:.9f}\n")
+    if relocalizations_path:
+        with open(relocalizations_path, "w") as out:
+            out.write("# query_time match_time\n")
+            for query, match in relocalizations:
                 if query in keyframes and match in keyframes:
                     out.write(f"{keyframes[query][0]:.9f} {keyframes[match][0]:.9f}\n")
     for name in sorted(counts):

@@ -3,6 +3,8 @@
 # under a virtual X server, and saves a screenshot of rviz once the bag has ended: what a user
 # sees before installing (docs/ and the README show these).
 #   scripts/rviz_screenshot.sh BAG OUT.png [CALIBRATION.yaml] [roslaunch arg:=value ...]
+# RVIZ_VIEW="DISTANCE X Y" moves the shipped config's orbit view (distance [m], focal point in
+# the map frame [m]) for a scene of another size; everything else stays as shipped.
 # Needs `make build` and the packages rviz, xvfb and imagemagick (`make screenshots` installs
 # them and makes the pictures in docs/).
 set -euo pipefail
@@ -44,8 +46,21 @@ cleanup() {
 trap cleanup EXIT
 until rosparam list > /dev/null 2>&1; do sleep 0.2; done
 
+config=$PWD/config/stereo_fabmap_slam.rviz
+if [ -n "${RVIZ_VIEW:-}" ]; then
+  read -r distance focal_x focal_y <<< "$RVIZ_VIEW"
+  /usr/bin/python3 - "$config" "$log_dir/view.rviz" "$distance" "$focal_x" "$focal_y" <<'PYTHON'
+import re, sys
+text = open(sys.argv[1]).read()
+text = re.sub(r"(\n      Distance: )[0-9.]+", r"\g<1>" + sys.argv[3], text)
+text = re.sub(r"(Focal Point:\n        X: )[-0-9.]+(\n        Y: )[-0-9.]+",
+              r"\g<1>" + sys.argv[4] + r"\g<2>" + sys.argv[5], text)
+open(sys.argv[2], "w").write(text)
+PYTHON
+  config=$log_dir/view.rviz
+fi
 roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$bag" calibration:="$calibration" rviz:=true \
-  delay:=6 "$@" > "$log_dir/roslaunch.log" 2>&1 &
+  rviz_config:="$config" delay:=6 "$@" > "$log_dir/roslaunch.log" 2>&1 &
 launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 deadline=$((SECONDS + 90 + 3 * duration))

@@ -29,17 +29,17 @@ std::string FormatMetres(double value, double step) {
 
 }  // namespace
 
-void TopViewPlot::AddPath(const std::vector<Eigen::Vector3d>& positions, const cv::Scalar& color,
-                          const std::string& label, int thickness) {
+void TrajectoryPlot::AddPath(const std::vector<Eigen::Vector3d>& positions, const cv::Scalar& color,
+                             const std::string& label, int thickness) {
   layers_.push_back({Layer::Kind::kPath, positions, color, label, thickness});
 }
 
-void TopViewPlot::AddPoints(const std::vector<Eigen::Vector3d>& positions, const cv::Scalar& color,
-                            const std::string& label, int radius) {
+void TrajectoryPlot::AddPoints(const std::vector<Eigen::Vector3d>& positions,
+                               const cv::Scalar& color, const std::string& label, int radius) {
   layers_.push_back({Layer::Kind::kPoints, positions, color, label, radius});
 }
 
-void TopViewPlot::AddSegments(
+void TrajectoryPlot::AddSegments(
     const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& segments,
     const cv::Scalar& color, const std::string& label, int thickness) {
   Layer layer{Layer::Kind::kSegments, {}, color, label, thickness};
@@ -50,16 +50,19 @@ void TopViewPlot::AddSegments(
   layers_.push_back(std::move(layer));
 }
 
-cv::Mat TopViewPlot::Render(const cv::Size& size, const std::string& title) const {
+cv::Mat TrajectoryPlot::Render(const cv::Size& size, const std::string& title,
+                               PlotView view) const {
   cv::Mat image(size, CV_8UC3, cv::Scalar(255, 255, 255));
+  // The vertical axis of the picture: y seen from above, z from the side.
+  const int vertical = view == PlotView::kTop ? 1 : 2;
   double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x;
   double min_y = min_x, max_y = -min_x;
   for (const Layer& layer : layers_) {
     for (const Eigen::Vector3d& p : layer.positions) {
       min_x = std::min(min_x, p.x());
       max_x = std::max(max_x, p.x());
-      min_y = std::min(min_y, p.y());
-      max_y = std::max(max_y, p.y());
+      min_y = std::min(min_y, p[vertical]);
+      max_y = std::max(max_y, p[vertical]);
     }
   }
   if (!std::isfinite(min_x)) {
@@ -99,7 +102,8 @@ cv::Mat TopViewPlot::Render(const cv::Size& size, const std::string& title) cons
     cv::putText(image, FormatMetres(y, step), left + cv::Point(-55, 4), font, 0.4, text_color);
   }
   cv::putText(image, "x [m]", cv::Point(size.width / 2, size.height - 12), font, 0.5, text_color);
-  cv::putText(image, "y [m]", cv::Point(8, margin_top - 12), font, 0.5, text_color);
+  cv::putText(image, view == PlotView::kTop ? "y [m]" : "z [m]", cv::Point(8, margin_top - 12),
+              font, 0.5, text_color);
   if (!title.empty()) {
     cv::putText(image, title, cv::Point(margin_left, 24), font, 0.6, cv::Scalar(0, 0, 0), 1,
                 cv::LINE_AA);
@@ -107,7 +111,9 @@ cv::Mat TopViewPlot::Render(const cv::Size& size, const std::string& title) cons
 
   for (const Layer& layer : layers_) {
     std::vector<cv::Point> pixels;
-    for (const Eigen::Vector3d& p : layer.positions) pixels.push_back(to_pixel(p.x(), p.y()));
+    for (const Eigen::Vector3d& p : layer.positions) {
+      pixels.push_back(to_pixel(p.x(), p[vertical]));
+    }
     switch (layer.kind) {
       case Layer::Kind::kPath:
         cv::polylines(image, pixels, false, layer.color, layer.width, cv::LINE_AA);

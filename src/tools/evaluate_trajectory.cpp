@@ -21,15 +21,21 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 
 constexpr char kUsage[] =
     "usage: evaluate_trajectory --gt FILE --est FILE [--align se3|sim3|none] [--max-dt S]\n"
-    "                           [--gt-to-camera sensor.yaml] [--rpe-delta D] [--rpe-unit "
-    "frames|m]\n"
-    "                           [--json] [--plot out.png] [--keyframes FILE] [--loops FILE]\n"
+    "                           [--gt-to-camera sensor.yaml | --gt-to-base stereo.yaml]\n"
+    "                           [--rpe-delta D] [--rpe-unit frames|m] [--json] [--plot out.png]\n"
+    "                           [--keyframes FILE] [--loops FILE] [--relocalizations FILE]\n"
     "Trajectory files: TUM (t x y z qx qy qz qw), EuRoC CSV (.csv, stamps in ns) or KITTI (3x4).\n"
     "ATE: positions of the estimate aligned to the ground truth (Umeyama, --align, default se3),\n"
     "then RMSE/mean/median/max of the position differences, as evo_ape -a.\n"
     "RPE: for every matched pose i and the pose j --rpe-delta later (default 1 frame), the\n"
     "translation norm and angle of (GT_i^-1 GT_j)^-1 (EST_i^-1 EST_j).\n"
-    "--loops FILE: lines 'query_time match_time' (loop edges), drawn in the plot.\n"
+    "--gt-to-camera: the ground truth of the body moved to the camera of a sensor.yaml (T_BS),\n"
+    "as the offline runner's camera trajectories; --gt-to-base: moved to the base of a stereo\n"
+    "calibration (its T_body_base, e.g. config/euroc_stereo.yaml), as the nodelets' odometry.\n"
+    "--plot: a top view (x-y) and a side view (x-z) of ground truth and aligned estimate, with\n"
+    "the keyframes, loop edges and relocalizations given.\n"
+    "--loops FILE, --relocalizations FILE: lines 'query_time match_time' (the two keyframes of\n"
+    "each loop edge or relocalization), drawn in the plot.\n"
     "--poses FILE: more poses in the estimate's frame (e.g. relocalizations, TUM), measured\n"
     "with the estimate's alignment: one line each, 'pose T: E m, A deg' (not with --json).\n";
 
@@ -78,33 +84,59 @@ Eigen::Vector3d NearestPosition(const evaluation::Trajectory& trajectory,
   return r.alignment * nearest->pose.translation();
 }
 
-// `keyframes` (may be empty) are drawn with the estimate's alignment; `loops` (pairs of
-// keyframe times, may be empty) as segments between the keyframes (or estimated poses) nearest
-// those times.
+using TimePairs = std::vector<std::pair<double, double>>;
+
+// Lines "time time" of a file (loop edges, relocalizations).
+TimePairs ReadTimePairs(const std::string& path) {
+  TimePairs pairs;
+  for (const io::TextRow& row : io::ReadDelimitedText(path, io::Separator::kWhitespace)) {
+    if (row.fields.size() < 2) throw io::FileError(path, row.line_number, "expected two times");
+    pairs.emplace_back(io::ParseDouble(row.fields[0], path, row.line_number),
+                       io::ParseDouble(row.fields[1], path, row.line_number));
+  }
+  return pairs;
+}
+
+// `keyframes` (may be empty) are drawn with the estimate's alignment; `loops` and
+// `relocalizations` (pairs of keyframe times, may be empty) as segments between the keyframes
+// (or estimated poses) nearest those times. Top view on the left, side view on the right.
 void WritePlot(const evaluation::EvaluationResult& r, const evaluation::Trajectory& keyframes,
-               const evaluation::Trajectory& estimate_raw,
-               const std::vector<std::pair<double, double>>& loops, const std::string& path) {
+               const evaluation::Trajectory& estimate_raw, const TimePairs& loops,
+               const TimePairs& relocalizations, const std::string& path) {
   std::vector<Eigen::Vector3d> reference, estimate, keyframe_positions;
   for (const auto& p : r.matched_reference) reference.push_back(p.pose.translation());
   for (const auto& p : r.aligned_estimate) estimate.push_back(p.pose.translation());
   for (const auto& p : keyframes) keyframe_positions.push_back(r.alignment * p.pose.translation());
-  evaluation::TopViewPlot plot;
+  evaluation::TrajectoryPlot plot;
   plot.AddPath(reference, cv::Scalar(80, 80, 80), "ground truth", 3);
   plot.AddPath(estimate, cv::Scalar(200, 90, 0), "estimate (aligned)", 2);
   if (!keyframe_positions.empty())
-    plot.AddPoints(keyframe_positions, cv::Scalar(30, 30, 220), "keyframes", 4);
-  if (!loops.empty()) {
-    const evaluation::Trajectory& ends = keyframes.empty() ? estimate_raw : keyframes;
+    plot.AddPoints(keyframe_positions, cv::Scalar(60, 150, 60), "keyframes", 3);
+  const evaluation::Trajectory& ends = keyframes.empty() ? estimate_raw : keyframes;
+  const auto segments_of = [&](const TimePairs& pairs) {
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> segments;
-    for (const auto& [query, match] : loops) {
+    for (const auto& [query, match] : pairs) {
       segments.emplace_back(NearestPosition(ends, r, query), NearestPosition(ends, r, match));
     }
-    plot.AddSegments(segments, cv::Scalar(40, 170, 40), "loop edges", 2);
+    return segments;
+  };
+  if (!loops.empty())
+    plot.AddSegments(segments_of(loops), cv::Scalar(40, 40, 230), "loop edges", 2);
+  if (!relocalizations.empty()) {
+    const auto segments = segments_of(relocalizations);
+    plot.AddSegments(segments, cv::Scalar(200, 40, 200), "relocalizations", 2);
+    std::vector<Eigen::Vector3d> found;
+    for (const auto& segment : segments) found.push_back(segment.first);
+    plot.AddPoints(found, cv::Scalar(200, 40, 200), "", 6);
   }
   char title[128];
-  std::snprintf(title, sizeof(title), "ATE RMSE %.2f cm over %zu poses", r.ate.rmse * 100.0,
-                r.matched);
-  if (!cv::imwrite(path, plot.Render(cv::Size(900, 700), title))) {
+  std::snprintf(title, sizeof(title), "top view (x-y): ATE RMSE %.2f cm over %zu poses",
+                r.ate.rmse * 100.0, r.matched);
+  cv::Mat image;
+  cv::hconcat(plot.Render(cv::Size(800, 650), title, evaluation::PlotView::kTop),
+              plot.Render(cv::Size(800, 650), "side view (x-z)", evaluation::PlotView::kSide),
+              image);
+  if (!cv::imwrite(path, image)) {
     throw std::runtime_error("cannot write plot " + path);
   }
 }
@@ -117,8 +149,9 @@ int main(int argc, char** argv) {
   std::optional<tools::CommandLine> args;
   try {
     args.emplace(argc, argv,
-                 std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "plot",
-                                       "rpe-delta", "rpe-unit", "keyframes", "loops", "poses"},
+                 std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "gt-to-base",
+                                       "plot", "rpe-delta", "rpe-unit", "keyframes", "loops",
+                                       "relocalizations", "poses"},
                  std::set<std::string>{"json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -129,6 +162,9 @@ int main(int argc, char** argv) {
     }
     if (args->Value("poses") && args->Flag("json")) {
       throw std::invalid_argument("--poses prints a table: leave out --json");
+    }
+    if (args->Value("gt-to-camera") && args->Value("gt-to-base")) {
+      throw std::invalid_argument("give --gt-to-camera or --gt-to-base, not both");
     }
     gt_path = *args->Value("gt");
     est_path = *args->Value("est");
@@ -152,6 +188,10 @@ int main(int argc, char** argv) {
     if (const auto sensor_yaml = args->Value("gt-to-camera")) {
       const camera::CameraCalibration camera = camera::ReadEurocSensorYaml(*sensor_yaml);
       ground_truth = evaluation::TransformToSensorFrame(ground_truth, camera.T_body_camera);
+    }
+    if (const auto stereo_yaml = args->Value("gt-to-base")) {
+      ground_truth = evaluation::TransformToSensorFrame(
+          ground_truth, camera::ReadStereoCalibrationYaml(*stereo_yaml).T_body_base);
     }
     const evaluation::Trajectory estimate = evaluation::ReadTrajectory(est_path);
     const evaluation::EvaluationResult result =
@@ -184,20 +224,13 @@ int main(int argc, char** argv) {
     }
     if (const auto plot_path = args->Value("plot")) {
       const auto keyframes_path = args->Value("keyframes");
-      std::vector<std::pair<double, double>> loops;
-      if (const auto loops_path = args->Value("loops")) {
-        for (const io::TextRow& row :
-             io::ReadDelimitedText(*loops_path, io::Separator::kWhitespace)) {
-          if (row.fields.size() < 2)
-            throw io::FileError(*loops_path, row.line_number, "expected two times");
-          loops.emplace_back(io::ParseDouble(row.fields[0], *loops_path, row.line_number),
-                             io::ParseDouble(row.fields[1], *loops_path, row.line_number));
-        }
-      }
+      const auto loops_path = args->Value("loops");
+      const auto relocalizations_path = args->Value("relocalizations");
       WritePlot(
           result,
           keyframes_path ? evaluation::ReadTrajectory(*keyframes_path) : evaluation::Trajectory{},
-          estimate, loops, *plot_path);
+          estimate, loops_path ? ReadTimePairs(*loops_path) : TimePairs{},
+          relocalizations_path ? ReadTimePairs(*relocalizations_path) : TimePairs{}, *plot_path);
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "evaluate_trajectory: %s\n", error.what());

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
@@ -87,18 +88,70 @@ TEST_F(EvaluateTrajectoryTool, GroundTruthInTheWrongFrameIsWorse) {
   EXPECT_GT(JsonNumber(json, "ate_rmse"), 0.002);
 }
 
-TEST_F(EvaluateTrajectoryTool, TableAndPlot) {
+// Pixels of (nearly) one BGR colour in a region of the image.
+int CountColour(const cv::Mat& image, const cv::Rect& region, const cv::Scalar& colour) {
+  cv::Mat mask;
+  cv::inRange(image(region), colour - cv::Scalar(30, 30, 30), colour + cv::Scalar(30, 30, 30),
+              mask);
+  return cv::countNonZero(mask);
+}
+
+TEST_F(EvaluateTrajectoryTool, TableAndPlotWithLoopsAndRelocalizations) {
   int status = -1;
   const std::string plot = temp_.path() + "/plot.png";
-  const std::string table = Run("--gt " + gt_path_ + " --est " + est_path_ + " --gt-to-camera " +
-                                    sensor_yaml_ + " --align sim3 --plot " + plot,
-                                &status);
+  // A loop edge and a relocalization between frames 3 s apart (the subset moves ~0.4 m).
+  const double t0 = estimate_[20].timestamp, t1 = estimate_[80].timestamp;
+  const double t2 = estimate_[100].timestamp, t3 = estimate_[160].timestamp;
+  WriteTextFile(temp_.path() + "/loops.txt",
+                "# query match\n" + std::to_string(t1) + " " + std::to_string(t0) + "\n");
+  WriteTextFile(temp_.path() + "/relocalizations.txt",
+                std::to_string(t3) + " " + std::to_string(t2) + "\n");
+  const std::string table =
+      Run("--gt " + gt_path_ + " --est " + est_path_ + " --gt-to-camera " + sensor_yaml_ +
+              " --align sim3 --plot " + plot + " --loops " + temp_.path() + "/loops.txt" +
+              " --relocalizations " + temp_.path() + "/relocalizations.txt",
+          &status);
   ASSERT_EQ(status, 0) << table;
   EXPECT_NE(table.find("ATE [cm]"), std::string::npos) << table;
   EXPECT_NE(table.find("sim3"), std::string::npos) << table;
   const cv::Mat image = cv::imread(plot);
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(image.size(), cv::Size(900, 700));
+  // Top view on the left, side view on the right, each with the estimate (blue-orange), the
+  // loop edge (red) and the relocalization (magenta).
+  ASSERT_EQ(image.size(), cv::Size(1600, 650));
+  for (const cv::Rect half : {cv::Rect(0, 0, 800, 650), cv::Rect(800, 0, 800, 650)}) {
+    EXPECT_GT(CountColour(image, half, cv::Scalar(200, 90, 0)), 50) << half;
+    EXPECT_GT(CountColour(image, half, cv::Scalar(40, 40, 230)), 20) << half;
+    EXPECT_GT(CountColour(image, half, cv::Scalar(200, 40, 200)), 20) << half;
+  }
+}
+
+// Base poses (ROS's base_link, T_body_base of config/euroc_stereo.yaml: rotated from the body)
+// match the ground truth moved to the base, not the body's: the relative motions differ by the
+// rotation, which no alignment of the whole trajectory removes.
+TEST_F(EvaluateTrajectoryTool, GroundTruthMovedToTheBase) {
+  const std::string calibration = RepositoryRoot() + "/config/euroc_stereo.yaml";
+  const Eigen::Isometry3d T_body_base = camera::ReadStereoCalibrationYaml(calibration).T_body_base;
+  const evaluation::Trajectory base = evaluation::TransformToSensorFrame(
+      datasets::EurocSequence::Open(EurocSequencePath("MH01_first10s")).ground_truth(),
+      T_body_base);
+  const std::string base_path = temp_.path() + "/base.txt";
+  evaluation::WriteTumTrajectory(base, base_path);
+  int status = -1;
+  const std::string matched =
+      Run("--gt " + gt_path_ + " --est " + base_path + " --gt-to-base " + calibration + " --json",
+          &status);
+  ASSERT_EQ(status, 0) << matched;
+  EXPECT_LT(JsonNumber(matched, "ate_rmse"), 1e-6);
+  EXPECT_LT(JsonNumber(matched, "rpe_trans_rmse"), 1e-6);
+  const std::string body = Run("--gt " + gt_path_ + " --est " + base_path + " --json", &status);
+  ASSERT_EQ(status, 0) << body;
+  EXPECT_GT(JsonNumber(body, "rpe_trans_rmse"), 1e-4);
+  const std::string both = Run("--gt " + gt_path_ + " --est " + base_path + " --gt-to-base " +
+                                   calibration + " --gt-to-camera " + sensor_yaml_,
+                               &status);
+  EXPECT_EQ(status, 2);
+  EXPECT_NE(both.find("not both"), std::string::npos) << both;
 }
 
 TEST_F(EvaluateTrajectoryTool, ExtraPosesAreMeasuredWithTheEstimatesAlignment) {

@@ -9,9 +9,12 @@
 
 namespace stereo_fabmap_slam::evaluation {
 
-// A top view (x right, y up, in metres) of paths, points and segments, with a metric grid and a
-// legend, rendered to an image. Later layers draw over earlier ones.
-class TopViewPlot {
+// Which two axes a plot shows: from above (x right, y up) or from the side (x right, z up).
+enum class PlotView { kTop, kSide };
+
+// Paths, points and segments in metres, with a metric grid, axis labels and a legend, rendered
+// to an image from above or from the side. Later layers draw over earlier ones.
+class TrajectoryPlot {
  public:
   void AddPath(const std::vector<Eigen::Vector3d>& positions, const cv::Scalar& color,
                const std::string& label, int thickness = 2);
@@ -21,7 +24,8 @@ class TopViewPlot {
                    const cv::Scalar& color, const std::string& label, int thickness = 1);
 
   // A BGR image of the given size; the view fits everything added, with equal axis scales.
-  cv::Mat Render(const cv::Size& size, const std::string& title = "") const;
+  cv::Mat Render(const cv::Size& size, const std::string& title = "",
+                 PlotView view = PlotView::kTop) const;
 
  private:
   struct Layer {
