@@ -105,10 +105,10 @@ screenshots: build
 	$(BIN)/euroc_to_bag $(STEREO_FABMAP_SLAM_DATA)/euroc/MH01_first10s $(SCREENSHOTS)/MH01_first10s.bag
 	rm -rf $(SCREENSHOTS)/loop
 	$(BIN)/make_synthetic_sequence --out $(SCREENSHOTS)/loop --route loop --seconds 40 --seed 1 > /dev/null
-	RVIZ_VIEW="6 1 0" bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/MH01_first10s.bag \
-	  docs/rviz_euroc_mh01.png
-	bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/loop/sequence.bag docs/rviz_synthetic_loop.png \
-	  $(SCREENSHOTS)/loop/stereo_calibration.yaml
+	for attempt in 1 2 3; do RVIZ_VIEW="6 1 0" bash scripts/rviz_screenshot.sh \
+	  $(SCREENSHOTS)/MH01_first10s.bag docs/rviz_euroc_mh01.png && break; done
+	for attempt in 1 2 3; do bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/loop/sequence.bag \
+	  docs/rviz_synthetic_loop.png $(SCREENSHOTS)/loop/stereo_calibration.yaml && break; done
 
 clean:
 	rm -rf build

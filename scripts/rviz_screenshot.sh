@@ -77,5 +77,10 @@ while [ $missing -lt 3 ]; do
   sleep 0.5
 done
 sleep 4  # the Visualizer's last refresh and rviz's next frames
+# rviz under Xvfb's software OpenGL now and then aborts at start: a black picture is no picture.
+if ! rosnode list 2> /dev/null | grep -q '^/rviz$'; then
+  echo "$0: rviz is not running (see $log_dir/log); try again" >&2
+  exit 3
+fi
 import -window root "$out"
 echo "saved $out"

@@ -60,6 +60,7 @@ class BackendNodelet : public nodelet::Nodelet {
   ros::Publisher update_publisher_, graph_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   ros::WallTimer tf_timer_;
+  ros::Time last_tf_stamp_;  // only the timer's thread touches it
 
   std::mutex mutex_;
   std::condition_variable wake_;
@@ -165,12 +166,17 @@ void BackendNodelet::OnCorrection(const geometry_msgs::TransformStampedConstPtr&
 }
 
 void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
+  // On simulated time the clock may not have moved since the last broadcast (a bag paused or
+  // slower than the timer): the same stamp again would only make tf listeners warn.
+  const ros::Time now = ros::Time::now();
+  if (now <= last_tf_stamp_) return;
+  last_tf_stamp_ = now;
   geometry_msgs::TransformStamped transform;
   {
     std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
     transform.transform = ros_conversions::ToTransformMessage(map_to_odom_);
   }
-  transform.header.stamp = ros::Time::now();
+  transform.header.stamp = now;
   transform.header.frame_id = map_frame_;
   transform.child_frame_id = odom_frame_;
   tf_broadcaster_->sendTransform(transform);

@@ -212,6 +212,13 @@ void ClassifyKeypoints(const features::StereoFeatures& features, const std::vect
 
 TrackingResult Tracker::StartOver(double timestamp, features::StereoFeatures features,
                                   const Eigen::Isometry3d& predicted, TrackingResult result) {
+  // The pose is the motion model's guess (or the origin), not an estimate: its covariance is
+  // unknown, and no key point was tracked, whatever a failed attempt classified.
+  constexpr double kUnknownVariance = 1e6;
+  result.covariance = geometry::PoseCovariance::Identity() * kUnknownVariance;
+  result.inlier_pixels.clear();
+  result.outlier_pixels.clear();
+  result.untracked_pixels.clear();
   ClassifyKeypoints(features, {}, {}, &result);
   StartMap(timestamp, std::move(features), predicted, &result);
   if (!result.keyframe) result.state = TrackingState::kLost;

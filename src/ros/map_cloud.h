@@ -19,8 +19,8 @@ namespace stereo_fabmap_slam::ros_visualization {
 
 class MapCloud {
  public:
-  // Keeps the keyframe's stereo points that are map points (tracked, so not single-frame
-  // noise) and that no earlier keyframe brought.
+  // Keeps the keyframe's stereo points that are map points and that no other keyframe brought
+  // (a keyframe sent again replaces its own).
   void AddKeyframe(const stereo_fabmap_slam::Keyframe& keyframe);
 
   // The points of the keyframes in `graph`, at their map poses; keyframes the graph does not
@@ -31,7 +31,11 @@ class MapCloud {
   std::size_t points() const { return total_points_; }
 
  private:
-  std::map<std::uint64_t, std::vector<Eigen::Vector3f>> points_of_keyframe_;  // camera frame
+  struct KeyframePoints {
+    std::vector<std::int64_t> ids;
+    std::vector<Eigen::Vector3f> points;  // camera frame
+  };
+  std::map<std::uint64_t, KeyframePoints> points_of_keyframe_;
   std::unordered_set<std::int64_t> seen_map_points_;
   std::size_t total_points_ = 0;
 };

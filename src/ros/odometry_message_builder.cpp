@@ -34,7 +34,9 @@ nav_msgs::Odometry OdometryMessageBuilder::Build(const ros::Time& stamp,
   if (continues_previous && previous_ && dt > 0) {
     const Eigen::Isometry3d motion = previous_->T_odom_base.inverse() * T_odom_base;
     const Eigen::AngleAxisd rotation(motion.rotation());
-    const Eigen::Vector3d linear = motion.translation() / dt;
+    // In the current base_link's axes (nav_msgs: the twist is in child_frame_id); the rotation
+    // vector is the same in both frames.
+    const Eigen::Vector3d linear = motion.rotation().transpose() * motion.translation() / dt;
     const Eigen::Vector3d angular = rotation.angle() * rotation.axis() / dt;
     odometry.twist.twist.linear.x = linear.x();
     odometry.twist.twist.linear.y = linear.y();

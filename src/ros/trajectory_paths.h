@@ -23,7 +23,9 @@ class TrajectoryPaths {
   // A frame's odometry (the base in odom), in time order as odometry comes; a frame older than
   // the last starts the paths over.
   void AddOdometry(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base);
-  // A keyframe as the tracker published it (its camera in odom).
+  // A keyframe as the tracker published it (its camera in odom): the pose the frames after it
+  // were tracked with, so each frame keeps its place relative to it (bundle adjustment's later
+  // refinements move the keyframe in map_graph, and the frame with it).
   void AddKeyframe(std::uint64_t id, const ros::Time& stamp,
                    const Eigen::Isometry3d& T_odom_camera);
   // The Backend's latest graph: keyframes' map poses and map -> odom.

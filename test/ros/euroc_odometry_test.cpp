@@ -141,7 +141,14 @@ TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
       (online_motion.translation() - true_motion.translation()).norm();
   RecordProperty("motion_m", std::to_string(true_motion.translation().norm()));
   RecordProperty("ground_truth_difference_m", std::to_string(ground_truth_difference));
-  EXPECT_LT(ground_truth_difference, 0.05) << "true motion " << true_motion.translation().norm();
+  // 4.9 mm measured over 0.39 m; 1.5 cm is three times that. A mount turned by a few degrees
+  // would turn the motion vector by as much (2 cm per 3 degrees here) and fail.
+  EXPECT_LT(ground_truth_difference, 0.015) << "true motion " << true_motion.translation().norm();
+  const double rotation_error_deg =
+      Eigen::AngleAxisd(true_motion.rotation().transpose() * online_motion.rotation()).angle() *
+      180.0 / M_PI;
+  RecordProperty("ground_truth_rotation_difference_deg", std::to_string(rotation_error_deg));
+  EXPECT_LT(rotation_error_deg, 1.0);
 }
 
 // The same bag with the calibration from its camera_info (written by euroc_to_bag, found
@@ -182,8 +189,8 @@ TEST(EurocOdometry, CalibrationFromTheBagsCameraInfo) {
   spinner.stop();
   std::lock_guard<std::mutex> lock(mutex);
   RecordProperty("odometry_messages", static_cast<int>(online.size()));
-  // The first camera_info pair arrives with the first images: at most a frame or two without.
-  EXPECT_GE(online.size(), 190u) << ReadTextFile(temp.path() + "/roslaunch.log");
+  // The first camera_info pair arrives with the first images: a frame may come before it.
+  EXPECT_GE(online.size(), 198u) << ReadTextFile(temp.path() + "/roslaunch.log");
   ASSERT_GE(online.size(), 2u);
   const auto offline_pose = [&](std::int64_t stamp_ns) {
     for (const evaluation::StampedPose& p : offline) {
@@ -195,12 +202,17 @@ TEST(EurocOdometry, CalibrationFromTheBagsCameraInfo) {
   };
   // The base is the raw left camera, the offline runner's the rectified one: the same origin,
   // so the distances travelled agree (the offline run starts a frame or two earlier).
+  // The same for the rotation angle of the motion (unchanged by a change of frame).
   const auto first = online.begin(), last = std::prev(online.end());
-  const double online_distance = (first->second.inverse() * last->second).translation().norm();
-  const double offline_distance =
-      (offline_pose(first->first).inverse() * offline_pose(last->first)).translation().norm();
+  const Eigen::Isometry3d online_motion = first->second.inverse() * last->second;
+  const Eigen::Isometry3d offline_motion =
+      offline_pose(first->first).inverse() * offline_pose(last->first);
+  const double online_distance = online_motion.translation().norm();
+  const double offline_distance = offline_motion.translation().norm();
   RecordProperty("distance_difference_m", std::to_string(online_distance - offline_distance));
   EXPECT_NEAR(online_distance, offline_distance, 0.01);
+  EXPECT_NEAR(Eigen::AngleAxisd(online_motion.rotation()).angle(),
+              Eigen::AngleAxisd(offline_motion.rotation()).angle(), 0.2 * M_PI / 180.0);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
+#include <stereo_fabmap_slam/Keyframe.h>
 #include <stereo_fabmap_slam/LoopEdge.h>
 #include <stereo_fabmap_slam/MapGraph.h>
 #include <tf2_msgs/TFMessage.h>
@@ -46,6 +47,7 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
   std::size_t last_graph_keyframes = 0, path_poses = 0, cloud_points = 0;
   std::vector<std::pair<std::size_t, int>> drawn;
   int tracking_images = 0;
+  std::size_t keyframes_published = 0;
   ros::NodeHandle node;
   const ros::Subscriber loop_subscriber = node.subscribe<stereo_fabmap_slam::LoopEdge>(
       "/loop_edges", 1000, [&](const stereo_fabmap_slam::LoopEdgeConstPtr& message) {
@@ -103,6 +105,11 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
         std::lock_guard<std::mutex> lock(mutex);
         EXPECT_EQ(message->header.frame_id, "map");
         cloud_points = std::max<std::size_t>(cloud_points, message->width * message->height);
+      });
+  const ros::Subscriber keyframe_subscriber = node.subscribe<stereo_fabmap_slam::Keyframe>(
+      "/keyframes", 1000, [&](const stereo_fabmap_slam::KeyframeConstPtr&) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++keyframes_published;
       });
   const ros::Subscriber image_subscriber = node.subscribe<sensor_msgs::Image>(
       "/tracking_image", 10, [&](const sensor_msgs::ImageConstPtr& message) {
@@ -168,9 +175,15 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
     EXPECT_EQ(graph_counts.count(counts), 1u)
         << counts.first << " keyframes, " << counts.second << " loop edges drawn";
   }
+  // Against what the tracker and the LoopDetector published: every keyframe is drawn (the last
+  // few may come after the last refresh), no more, and no loop edge that was not published.
   RecordProperty("keyframes_drawn", static_cast<int>(drawn.back().first));
+  RecordProperty("keyframes_published", static_cast<int>(keyframes_published));
   EXPECT_GE(drawn.back().first + 3, last_graph_keyframes);
+  EXPECT_GE(drawn.back().first + 3, keyframes_published);
+  EXPECT_LE(drawn.back().first, keyframes_published);
   EXPECT_GE(drawn.back().second, 1) << "the loop edge is drawn";
+  EXPECT_LE(static_cast<std::size_t>(drawn.back().second), loops.size());
   EXPECT_GT(path_poses, 100u);  // 34 s at 20 Hz: 680 frames
   EXPECT_GT(cloud_points, 1000u);
   EXPECT_GT(tracking_images, 10);

@@ -61,6 +61,20 @@ TEST(BaseFrameConvention, KeyframesAndUpdatesRoundTrip) {
   EXPECT_TRUE(back.point_positions[0].second.isApprox(Eigen::Vector3d(1, 2, 3), 1e-12));
 }
 
+// A camera that is unsure only of its depth (optical z, the base's forward x): once the robot
+// has turned left by 90 degrees, that uncertainty is along odom's y.
+TEST(BaseFrameConvention, CovarianceFollowsTheMountAndTheHeading) {
+  const BaseFrameConvention frames(ForwardCameraMount());
+  geometry::PoseCovariance depth_only = geometry::PoseCovariance::Zero();
+  depth_only.diagonal() << 1e-6, 1e-6, 1e-4, 0, 0, 0;
+  const double quarter_turn = M_PI / 2 / 0.5;  // BaseAt turns 0.5 rad/s
+  const geometry::PoseCovariance in_odom = frames.BaseCovarianceInOdom(
+      LibraryCameraPose(frames.T_base_camera(), quarter_turn), depth_only);
+  EXPECT_NEAR(in_odom(1, 1), 1e-4, 1e-10);
+  EXPECT_NEAR(in_odom(0, 0), 1e-6, 1e-10);
+  EXPECT_NEAR(in_odom(2, 2), 1e-6, 1e-10);
+}
+
 TEST(OdometryMessageBuilder, TwistAndCovarianceOfTheBase) {
   const BaseFrameConvention frames(ForwardCameraMount());
   ros_conversions::OdometryMessageBuilder builder(frames, "odom", "base_link");

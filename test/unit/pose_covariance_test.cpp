@@ -131,11 +131,16 @@ TEST(PoseCovariance, MovesToAnotherFrameLikeSampledPoses) {
           << r << "," << c;
     }
   }
-  // Rotating the axes keeps the trace of each block.
-  const geometry::PoseCovariance rotated = geometry::RotateCovariance(moved, B.rotation());
-  const double rotated_trace = rotated.topLeftCorner<3, 3>().trace();
-  const double moved_trace = moved.topLeftCorner<3, 3>().trace();
-  EXPECT_NEAR(rotated_trace, moved_trace, 1e-12);
+  // Turning the axes by 90 degrees about z: what was along x is along y.
+  geometry::PoseCovariance uneven = geometry::PoseCovariance::Zero();
+  uneven.diagonal() << 1, 4, 9, 16, 25, 36;
+  const geometry::PoseCovariance rotated = geometry::RotateCovariance(
+      uneven, Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix());
+  EXPECT_NEAR(rotated(0, 0), 4, 1e-12);
+  EXPECT_NEAR(rotated(1, 1), 1, 1e-12);
+  EXPECT_NEAR(rotated(2, 2), 9, 1e-12);
+  EXPECT_NEAR(rotated(3, 3), 25, 1e-12);
+  EXPECT_NEAR(rotated(4, 4), 16, 1e-12);
 }
 
 TEST(PoseCovariance, TooFewPointsAreUnknownNotZero) {

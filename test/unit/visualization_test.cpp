@@ -96,6 +96,32 @@ TEST(MapMarkers, NothingToDrawDeletes) {
             visualization_msgs::Marker::ADD);
 }
 
+// Keyframes are cameras mounted on the base (turned and offset); the graph turns keyframe 1's
+// camera by 90 degrees about the map's z axis through the origin (a loop closure): the base
+// poses of the frames tracked after it turn with it, the earlier ones stay.
+TEST(TrajectoryPaths, TheMapPathTurnsWithItsKeyframe) {
+  Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
+  mount.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  mount.translation() = Eigen::Vector3d(0.2, 0.1, 0.5);
+  Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+  turn.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  ros_visualization::TrajectoryPaths paths;
+  paths.AddKeyframe(0, ros::Time(10.0), At(0) * mount);
+  paths.AddKeyframe(1, ros::Time(11.0), At(1) * mount);
+  for (int i = 0; i < 20; ++i) paths.AddOdometry(ros::Time(10.0 + 0.1 * i), At(0.1 * i));
+  MapGraph graph;
+  graph.keyframe_ids = {0, 1};
+  graph.keyframe_poses = {ros_conversions::ToPoseMessage(At(0) * mount),
+                          ros_conversions::ToPoseMessage(turn * At(1) * mount)};
+  graph.map_to_odom.rotation.w = 1;
+  paths.SetGraph(graph);
+  const nav_msgs::Path map_path = paths.MapPath("map", 100);
+  ASSERT_EQ(map_path.poses.size(), 20u);
+  EXPECT_TRUE(ros_conversions::FromPoseMessage(map_path.poses[5].pose).isApprox(At(0.5), 1e-9));
+  EXPECT_TRUE(
+      ros_conversions::FromPoseMessage(map_path.poses[15].pose).isApprox(turn * At(1.5), 1e-9));
+}
+
 // Frames tracked after keyframe 0 (at x = 0) and keyframe 1 (at x = 1 in odom); the graph then
 // moves keyframe 1 sideways by 0.5 m (a loop closure): the frames after it follow, the ones
 // before stay, and the odometry path does not change.
@@ -150,16 +176,29 @@ TEST(MapCloud, EachMapPointOnceAtItsKeyframesMapPose) {
   graph.keyframe_ids = {0, 1};
   graph.keyframe_poses = {ros_conversions::ToPoseMessage(At(10)),
                           ros_conversions::ToPoseMessage(At(20))};
+  // Keyframe 1 turned by 90 degrees about z: its point (0, 1, 4) lands at (20 - 1, 0, 4).
+  Eigen::Isometry3d turned = At(20);
+  turned.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  graph.keyframe_poses[1] = ros_conversions::ToPoseMessage(turned);
   const sensor_msgs::PointCloud2 message = cloud.Build(graph, 1000);
   ASSERT_EQ(message.width * message.height, 2u);
-  sensor_msgs::PointCloud2ConstIterator<float> x(message, "x");
+  sensor_msgs::PointCloud2ConstIterator<float> x(message, "x"), y(message, "y"), z(message, "z");
   EXPECT_FLOAT_EQ(*x, 10.0f);
-  ++x;
-  EXPECT_FLOAT_EQ(*x, 20.0f);
+  EXPECT_FLOAT_EQ(*z, 2.0f);
+  ++x, ++y, ++z;
+  EXPECT_NEAR(*x, 19.0f, 1e-5);
+  EXPECT_NEAR(*y, 0.0f, 1e-5);
+  EXPECT_NEAR(*z, 4.0f, 1e-5);
   EXPECT_EQ(cloud.Build(graph, 1).width * cloud.Build(graph, 1).height, 1u);  // bounded
   graph.keyframe_ids = {1};  // keyframe 0 not (yet) in the graph: its points wait
-  graph.keyframe_poses.resize(1);
+  graph.keyframe_poses = {ros_conversions::ToPoseMessage(At(20))};
   EXPECT_EQ(cloud.Build(graph, 1000).width, 1u);
+  // Keyframe 0 sent again without point 7: 7 is free for another keyframe to bring.
+  first.map_point_ids = {-1, -1, 8};
+  cloud.AddKeyframe(first);
+  EXPECT_EQ(cloud.points(), 1u);
+  cloud.AddKeyframe(second);
+  EXPECT_EQ(cloud.points(), 2u);
 }
 
 TEST(TrackingImage, ColoursSayWhatTrackingMadeOfEachPoint) {

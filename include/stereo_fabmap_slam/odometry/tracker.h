@@ -32,7 +32,8 @@ struct TrackingResult {
   int matches = 0;  // map points found in the frame
   int inliers = 0;  // of those, consistent with the pose
   // Of T_world_camera (right perturbation, translation then rotation): how well this frame's
-  // inliers pin the pose down relative to the local map (geometry::StereoPoseCovariance).
+  // inliers pin the pose down relative to the local map (geometry::StereoPoseCovariance); 1e6
+  // on the diagonal where the pose is not an estimate (a new map's first frame).
   geometry::PoseCovariance covariance = geometry::PoseCovariance::Identity();
   // The pose relative to a keyframe, so that the trajectory follows later keyframe corrections.
   std::int64_t reference_keyframe = -1;
