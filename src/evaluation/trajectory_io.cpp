@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 
@@ -17,40 +18,61 @@ using io::ReadDelimitedText;
 using io::Separator;
 using io::TextRow;
 
+// Finite numbers: NaN or infinity in a trajectory cannot be meant.
 std::vector<double> ParseNumbers(const TextRow& row, const std::string& path, std::size_t first,
                                  std::size_t count) {
   std::vector<double> values;
   for (std::size_t i = first; i < first + count; ++i) {
     values.push_back(ParseDouble(row.fields[i], path, row.line_number));
+    if (!std::isfinite(values.back())) {
+      throw FileError(path, row.line_number, "'" + row.fields[i] + "' is not a finite number");
+    }
   }
   return values;
 }
 
-void RequireFieldCount(const TextRow& row, const std::string& path,
-                       std::initializer_list<std::size_t> accepted, const char* layout) {
-  for (const std::size_t count : accepted) {
-    if (row.fields.size() == count) return;
-  }
+void RequireFieldCount(const TextRow& row, const std::string& path, std::size_t at_least,
+                       const char* layout) {
+  if (row.fields.size() >= at_least) return;
   throw FileError(path, row.line_number,
                   "expected " + std::string(layout) + ", found " +
                       std::to_string(row.fields.size()) + " fields");
 }
 
+// Normalised, as evo does; only a quaternion of (nearly) zero length has no rotation to mean.
 Eigen::Quaterniond CheckedQuaternion(double w, double x, double y, double z,
                                      const std::string& path, std::size_t line) {
   const Eigen::Quaterniond q(w, x, y, z);
-  if (!(std::abs(q.norm() - 1.0) < 1e-2)) {
-    throw FileError(path, line, "quaternion is not of unit length");
-  }
-  return q;
+  if (!(q.norm() > 1e-6)) throw FileError(path, line, "quaternion of zero length");
+  return q.normalized();
 }
 
-void RequireIncreasingTime(const Trajectory& trajectory, const std::string& path,
-                           std::size_t line) {
+// A first row whose first field is not a number is a header (EuRoC and evo CSVs without '#').
+bool IsHeader(const TextRow& row) {
+  const std::string& field = row.fields.front();
+  char* end = nullptr;
+  std::strtod(field.c_str(), &end);
+  return field.empty() || end == field.c_str();
+}
+
+void NoteStamp(const Trajectory& trajectory, TrajectoryFileNotes* notes) {
   const std::size_t n = trajectory.size();
-  if (n >= 2 && !(trajectory[n - 1].timestamp > trajectory[n - 2].timestamp)) {
-    throw FileError(path, line, "timestamps must increase");
+  if (notes == nullptr || n < 2) return;
+  if (trajectory[n - 1].timestamp == trajectory[n - 2].timestamp) ++notes->repeated_stamps;
+  if (trajectory[n - 1].timestamp < trajectory[n - 2].timestamp) ++notes->unordered_stamps;
+}
+
+// A timestamp in nanoseconds: an integer, or a number with an exponent or decimals (rounded to
+// the nanosecond; a double holds 1e18 to within 256 ns).
+double ParseNanosecondStamp(const std::string& field, const std::string& path, std::size_t line) {
+  char* end = nullptr;
+  std::strtoll(field.c_str(), &end, 10);
+  if (!field.empty() && end == field.c_str() + field.size()) {
+    return static_cast<double>(ParseInt64(field, path, line)) * 1e-9;
   }
+  const double value = ParseDouble(field, path, line);
+  if (!std::isfinite(value)) throw FileError(path, line, "'" + field + "' is not a finite number");
+  return std::round(value) * 1e-9;
 }
 
 struct FileCloser {
@@ -72,29 +94,39 @@ void FinishWriting(File file, const std::string& path) {
 
 }  // namespace
 
-Trajectory ReadTumTrajectory(const std::string& path) {
+Trajectory ReadTumTrajectory(const std::string& path, TrajectoryFileNotes* notes) {
   Trajectory trajectory;
-  for (const TextRow& row : ReadDelimitedText(path, Separator::kWhitespace)) {
-    RequireFieldCount(row, path, {8}, "8 fields 't x y z qx qy qz qw'");
+  const std::vector<TextRow> rows = ReadDelimitedText(path, Separator::kWhitespace);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const TextRow& row = rows[r];
+    if (r == 0 && IsHeader(row)) {
+      if (notes != nullptr) notes->header_skipped = true;
+      continue;
+    }
+    RequireFieldCount(row, path, 8, "8 fields 't x y z qx qy qz qw'");
     const std::vector<double> v = ParseNumbers(row, path, 0, 8);
     const Eigen::Quaterniond q = CheckedQuaternion(v[7], v[4], v[5], v[6], path, row.line_number);
     trajectory.push_back({v[0], PoseFromTranslationQuaternion({v[1], v[2], v[3]}, q)});
-    RequireIncreasingTime(trajectory, path, row.line_number);
+    NoteStamp(trajectory, notes);
   }
   return trajectory;
 }
 
-Trajectory ReadEurocTrajectory(const std::string& path) {
+Trajectory ReadEurocTrajectory(const std::string& path, TrajectoryFileNotes* notes) {
   Trajectory trajectory;
-  for (const TextRow& row : ReadDelimitedText(path, Separator::kComma)) {
-    RequireFieldCount(row, path, {8, 17},
-                      "8 or 17 fields 'timestamp [ns], x, y, z, qw, qx, qy, qz[, ...]'");
-    const std::int64_t stamp_ns = ParseInt64(row.fields[0], path, row.line_number);
+  const std::vector<TextRow> rows = ReadDelimitedText(path, Separator::kComma);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const TextRow& row = rows[r];
+    if (r == 0 && IsHeader(row)) {
+      if (notes != nullptr) notes->header_skipped = true;
+      continue;
+    }
+    RequireFieldCount(row, path, 8, "8 fields 'timestamp [ns], x, y, z, qw, qx, qy, qz[, ...]'");
+    const double stamp = ParseNanosecondStamp(row.fields[0], path, row.line_number);
     const std::vector<double> v = ParseNumbers(row, path, 1, 7);
     const Eigen::Quaterniond q = CheckedQuaternion(v[3], v[4], v[5], v[6], path, row.line_number);
-    trajectory.push_back({static_cast<double>(stamp_ns) * 1e-9,
-                          PoseFromTranslationQuaternion({v[0], v[1], v[2]}, q)});
-    RequireIncreasingTime(trajectory, path, row.line_number);
+    trajectory.push_back({stamp, PoseFromTranslationQuaternion({v[0], v[1], v[2]}, q)});
+    NoteStamp(trajectory, notes);
   }
   return trajectory;
 }
@@ -102,7 +134,11 @@ Trajectory ReadEurocTrajectory(const std::string& path) {
 Trajectory ReadKittiTrajectory(const std::string& path) {
   Trajectory trajectory;
   for (const TextRow& row : ReadDelimitedText(path, Separator::kWhitespace)) {
-    RequireFieldCount(row, path, {12}, "12 numbers (3x4 pose, row-major)");
+    if (row.fields.size() != 12) {
+      throw FileError(
+          path, row.line_number,
+          "expected 12 numbers (3x4 pose, row-major), found " + std::to_string(row.fields.size()));
+    }
     const std::vector<double> v = ParseNumbers(row, path, 0, 12);
     Eigen::Matrix3d rotation;
     rotation << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
@@ -162,28 +198,30 @@ TrajectoryFormat DetectTrajectoryFormat(const std::string& path) {
   }
   const std::vector<TextRow> rows = ReadDelimitedText(path, Separator::kWhitespace);
   if (rows.empty()) throw FileError(path, 0, "no poses in file");
-  const TextRow& first = rows.front();
+  // The first row of numbers (a header row may come first).
+  const TextRow& first = rows.size() > 1 && IsHeader(rows.front()) ? rows[1] : rows.front();
   if (first.fields.front().find(',') != std::string::npos) return TrajectoryFormat::kEuroc;
   if (first.fields.size() == 12) return TrajectoryFormat::kKitti;
-  if (first.fields.size() == 8) return TrajectoryFormat::kTum;
+  if (first.fields.size() >= 8) return TrajectoryFormat::kTum;
   throw FileError(path, first.line_number,
                   "cannot tell the format: expected TUM (8 fields), KITTI (12) or EuRoC CSV");
 }
 
-Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {
+Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format,
+                          TrajectoryFileNotes* notes) {
   switch (format) {
     case TrajectoryFormat::kTum:
-      return ReadTumTrajectory(path);
+      return ReadTumTrajectory(path, notes);
     case TrajectoryFormat::kEuroc:
-      return ReadEurocTrajectory(path);
+      return ReadEurocTrajectory(path, notes);
     case TrajectoryFormat::kKitti:
       return ReadKittiTrajectory(path);
   }
   throw FileError(path, 0, "unknown trajectory format");
 }
 
-Trajectory ReadTrajectory(const std::string& path) {
-  return ReadTrajectory(path, DetectTrajectoryFormat(path));
+Trajectory ReadTrajectory(const std::string& path, TrajectoryFileNotes* notes) {
+  return ReadTrajectory(path, DetectTrajectoryFormat(path), notes);
 }
 
 }  // namespace stereo_fabmap_slam::evaluation

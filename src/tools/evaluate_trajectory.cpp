@@ -39,6 +39,23 @@ constexpr char kUsage[] =
     "--poses FILE: more poses in the estimate's frame (e.g. relocalizations, TUM), measured\n"
     "with the estimate's alignment: one line each, 'pose T: E m, A deg' (not with --json).\n";
 
+// Reads a trajectory and tells on stderr what in it another tool may have meant differently.
+evaluation::Trajectory ReadWithWarnings(const std::string& path) {
+  evaluation::TrajectoryFileNotes notes;
+  evaluation::Trajectory trajectory = evaluation::ReadTrajectory(path, &notes);
+  if (notes.header_skipped) {
+    std::fprintf(stderr, "evaluate_trajectory: %s: first row taken as a header\n", path.c_str());
+  }
+  if (notes.repeated_stamps > 0 || notes.unordered_stamps > 0) {
+    std::fprintf(stderr,
+                 "evaluate_trajectory: warning: %s: %zu repeated and %zu decreasing timestamps; "
+                 "every pose is kept and each estimated pose takes the ground-truth pose nearest "
+                 "in time (as evo associates)\n",
+                 path.c_str(), notes.repeated_stamps, notes.unordered_stamps);
+  }
+  return trajectory;
+}
+
 void PrintStatsRow(const char* name, const evaluation::ErrorStatistics& s, double unit_scale) {
   std::printf("%-16s %10.4f %10.4f %10.4f %10.4f %8zu\n", name, s.rmse * unit_scale,
               s.mean * unit_scale, s.median * unit_scale, s.max * unit_scale, s.count);
@@ -184,7 +201,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    evaluation::Trajectory ground_truth = evaluation::ReadTrajectory(gt_path);
+    evaluation::Trajectory ground_truth = ReadWithWarnings(gt_path);
     if (const auto sensor_yaml = args->Value("gt-to-camera")) {
       const camera::CameraCalibration camera = camera::ReadEurocSensorYaml(*sensor_yaml);
       ground_truth = evaluation::TransformToSensorFrame(ground_truth, camera.T_body_camera);
@@ -193,7 +210,7 @@ int main(int argc, char** argv) {
       ground_truth = evaluation::TransformToSensorFrame(
           ground_truth, camera::ReadStereoCalibrationYaml(*stereo_yaml).T_body_base);
     }
-    const evaluation::Trajectory estimate = evaluation::ReadTrajectory(est_path);
+    const evaluation::Trajectory estimate = ReadWithWarnings(est_path);
     const evaluation::EvaluationResult result =
         evaluation::EvaluateTrajectory(ground_truth, estimate, options);
     if (args->Flag("json")) {

@@ -154,6 +154,27 @@ TEST_F(EvaluateTrajectoryTool, GroundTruthMovedToTheBase) {
   EXPECT_NE(both.find("not both"), std::string::npos) << both;
 }
 
+// A file repeating every stamp (as a visual-inertial system's output may): evaluated, not
+// refused, with a warning; the repeated poses are equal here, so the ATE stays that of the
+// estimate alone.
+TEST_F(EvaluateTrajectoryTool, RepeatedStampsAreEvaluatedWithAWarning) {
+  evaluation::Trajectory doubled;
+  for (const auto& pose : estimate_) {
+    doubled.push_back(pose);
+    doubled.push_back(pose);
+  }
+  const std::string path = temp_.path() + "/doubled.txt";
+  evaluation::WriteTumTrajectory(doubled, path);
+  int status = -1;
+  const std::string output =
+      Run("--gt " + gt_path_ + " --est " + path + " --gt-to-camera " + sensor_yaml_ + " --json",
+          &status);
+  ASSERT_EQ(status, 0) << output;
+  EXPECT_NE(output.find("200 repeated and 0 decreasing timestamps"), std::string::npos) << output;
+  EXPECT_EQ(JsonNumber(output, "matched"), 400);
+  EXPECT_LT(JsonNumber(output, "ate_rmse"), 1e-7);
+}
+
 TEST_F(EvaluateTrajectoryTool, ExtraPosesAreMeasuredWithTheEstimatesAlignment) {
   // Two poses in the estimate's frame (20 cm off like it): one true, one 10 cm further off.
   evaluation::Trajectory poses = {estimate_[50], estimate_[120]};

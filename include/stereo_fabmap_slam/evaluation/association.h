@@ -13,8 +13,9 @@ struct AssociatedPair {
 };
 
 // Pairs every estimated pose with the reference pose nearest in time, and keeps the pair only if
-// the two stamps differ by at most max_dt seconds. Both trajectories must be sorted by time.
-// The pairs come out in the order of the estimate.
+// the two stamps differ by at most max_dt seconds. Either may be in any order and repeat stamps
+// (of equal reference stamps the first in the file is taken). The pairs come out in the order of
+// the estimate.
 std::vector<AssociatedPair> AssociateByTimestamp(const Trajectory& reference,
                                                  const Trajectory& estimate, double max_dt);
 
