@@ -66,7 +66,7 @@ FABMAP_DEFAULT := build/fabmap/default
 $(FABMAP_DEFAULT)/vocabulary.bin:
 	@echo "Training the default FAB-MAP vocabulary (first build only, about a minute)"
 	rm -rf build/fabmap/synthetic
-	$(BIN)/make_synthetic_sequence --out build/fabmap/synthetic --route figure8 --seconds 20 --seed 7 --no-bag > /dev/null
+	$(BIN)/make_synthetic_sequence --output build/fabmap/synthetic --route figure8 --seconds 20 --seed 7 --no-bag > /dev/null
 	$(BIN)/train_fabmap --output $(FABMAP_DEFAULT) --spacing 5 /usr/share/doc/opencv-doc/examples/data build/fabmap/synthetic
 	rm -rf build/fabmap/synthetic
 
@@ -104,7 +104,7 @@ screenshots: build
 	mkdir -p $(SCREENSHOTS)
 	$(BIN)/euroc_to_bag $(STEREO_FABMAP_SLAM_DATA)/euroc/MH01_first10s $(SCREENSHOTS)/MH01_first10s.bag
 	rm -rf $(SCREENSHOTS)/loop
-	$(BIN)/make_synthetic_sequence --out $(SCREENSHOTS)/loop --route loop --seconds 40 --seed 1 > /dev/null
+	$(BIN)/make_synthetic_sequence --output $(SCREENSHOTS)/loop --route loop --seconds 40 --seed 1 > /dev/null
 	for attempt in 1 2 3; do RVIZ_VIEW="6 1 0" bash scripts/rviz_screenshot.sh \
 	  $(SCREENSHOTS)/MH01_first10s.bag docs/rviz_euroc_mh01.png && break; done
 	for attempt in 1 2 3; do bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/loop/sequence.bag \

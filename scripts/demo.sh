@@ -32,7 +32,7 @@ else
     echo "== rendering the synthetic hall (route loop, 40 s; cached for later runs)"
     rm -rf "$SEQUENCE"
     render_start=$SECONDS
-    "$BIN/make_synthetic_sequence" --out "$SEQUENCE" --route loop --seconds 40 --seed 1 > /dev/null
+    "$BIN/make_synthetic_sequence" --output "$SEQUENCE" --route loop --seconds 40 --seed 1 > /dev/null
     echo "   rendered 800 stereo frames in $((SECONDS - render_start)) s"
   fi
 fi

@@ -132,19 +132,36 @@ CameraCalibration ParseCameraCalibration(const io::YamlFile& file, const YAML::N
                         "unsupported distortion_model '" + model +
                             "' (supported: radial-tangential, radtan, plumb_bob)");
   }
+  // Each value is checked where it is read, so that an error names its own line.
+  const auto fail_at = [&](const char* key, const std::string& message) {
+    throw io::FileError(file.source(), node[key].Mark().line + 1, message);
+  };
   const std::vector<double> resolution = file.Numbers(node, "resolution", 2);
   calibration.resolution =
       cv::Size(static_cast<int>(resolution[0]), static_cast<int>(resolution[1]));
+  if (calibration.resolution.width <= 0 || calibration.resolution.height <= 0) {
+    fail_at("resolution", "camera resolution must be positive");
+  }
   const std::vector<double> intrinsics = file.Numbers(node, "intrinsics", 4);
   calibration.fx = intrinsics[0];
   calibration.fy = intrinsics[1];
   calibration.cx = intrinsics[2];
   calibration.cy = intrinsics[3];
+  if (!(calibration.fx > 0) || !(calibration.fy > 0)) {
+    fail_at("intrinsics", "focal lengths must be positive");
+  }
+  if (!(calibration.cx > 0 && calibration.cx < calibration.resolution.width && calibration.cy > 0 &&
+        calibration.cy < calibration.resolution.height)) {
+    fail_at("intrinsics", "principal point must lie inside the image");
+  }
   calibration.distortion = file.Numbers(node, "distortion_coefficients");
+  if (calibration.distortion.size() != 4 && calibration.distortion.size() != 5) {
+    fail_at("distortion_coefficients", "radial-tangential distortion needs 4 or 5 coefficients");
+  }
   calibration.T_body_camera = ParseTransform(file, node, "T_BS");
   if (file.Has(node, "rate_hz")) calibration.rate_hz = file.Number(node, "rate_hz");
   try {
-    calibration.Validate();
+    calibration.Validate();  // everything above; kept for a change of Validate()
   } catch (const std::invalid_argument& error) {
     throw io::FileError(file.source(), node.Mark().line + 1, error.what());
   }
@@ -164,10 +181,16 @@ StereoCalibration ReadStereoCalibrationYaml(const std::string& path) {
   if (file.Has(file.root(), "T_body_base")) {
     stereo.T_body_base = ParseTransform(file, file.root(), "T_body_base");
   }
+  // What only the pair can get wrong, at the right camera's line that disagrees.
+  const YAML::Node right = file.Child(file.root(), "right");
+  if (stereo.left.resolution != stereo.right.resolution) {
+    throw io::FileError(path, right["resolution"].Mark().line + 1,
+                        "left and right cameras must have the same resolution");
+  }
   try {
     stereo.Validate();
   } catch (const std::invalid_argument& error) {
-    throw io::FileError(path, 0, error.what());
+    throw io::FileError(path, right["T_BS"].Mark().line + 1, error.what());
   }
   return stereo;
 }

@@ -1,6 +1,7 @@
 #include "stereo_fabmap_slam/io/options_file.h"
 
 #include <filesystem>
+#include <string>
 
 namespace stereo_fabmap_slam::io {
 namespace {
@@ -13,7 +14,13 @@ void LoadChain(const std::string& path, int depth, std::vector<YamlFile>* layers
   if (file.Has(file.root(), "include")) {
     const std::filesystem::path included =
         std::filesystem::path(path).parent_path() / file.String(file.root(), "include");
-    LoadChain(included.string(), depth + 1, layers);
+    try {
+      LoadChain(included.string(), depth + 1, layers);
+    } catch (const InputError& error) {
+      // Say which file asked for it, and where: the error alone names only the included one.
+      throw InputError(std::string(error.what()) + "\n  included from " + path + ":" +
+                       std::to_string(file.root()["include"].Mark().line + 1));
+    }
   }
   layers->push_back(std::move(file));
 }

@@ -377,6 +377,15 @@ void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_messa
     NODELET_WARN_THROTTLE(5, "no calibration yet (waiting for camera_info); frame skipped");
     return;
   }
+  for (const sensor_msgs::ImageConstPtr& image : {left_message, right_message}) {
+    const std::string problem = ros_conversions::MalformedImageReason(*image);
+    if (!problem.empty()) {
+      NODELET_WARN_THROTTLE(5, "malformed image on %s: %s; frame skipped",
+                            image == left_message ? "left/image_raw" : "right/image_raw",
+                            problem.c_str());
+      return;
+    }
+  }
   cv_bridge::CvImageConstPtr left, right;
   try {
     // Colour images are converted to mono8; encodings cv_bridge cannot convert throw.

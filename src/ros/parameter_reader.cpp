@@ -1,6 +1,7 @@
 #include "parameter_reader.h"
 
 #include <stdexcept>
+#include <vector>
 
 namespace stereo_fabmap_slam::ros_parameters {
 
@@ -9,6 +10,7 @@ RosParameterReader::RosParameterReader(const ros::NodeHandle& node, const std::s
 
 template <typename T>
 void RosParameterReader::Get(const std::string& key, T* value, const char* expected) {
+  visited_.insert(key);
   const std::string name = section_ + "/" + key;
   if (!node_.hasParam(name)) return;
   if (!node_.getParam(name, *value)) {
@@ -18,6 +20,7 @@ void RosParameterReader::Get(const std::string& key, T* value, const char* expec
 
 void RosParameterReader::Visit(const std::string& key, double* value) {
   // Accept integers for real-valued fields (YAML "2" for 2.0).
+  visited_.insert(key);
   const std::string name = section_ + "/" + key;
   int whole = 0;
   if (node_.hasParam(name) && !node_.getParam(name, *value) && node_.getParam(name, whole)) {
@@ -25,6 +28,23 @@ void RosParameterReader::Visit(const std::string& key, double* value) {
     return;
   }
   Get(key, value, "a number");
+}
+
+void RosParameterReader::RejectUnknownKeys() const {
+  std::vector<std::string> names;
+  if (!node_.getParamNames(names)) return;  // no master to ask: nothing was read from it either
+  const std::string prefix = node_.resolveName(section_) + "/";
+  std::string unknown;
+  for (const std::string& name : names) {
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string key = name.substr(prefix.size());
+    if (!visited_.count(key)) unknown += (unknown.empty() ? "" : ", ") + name;
+  }
+  if (unknown.empty()) return;
+  std::string accepted;
+  for (const std::string& key : visited_) accepted += (accepted.empty() ? "" : ", ") + key;
+  throw std::invalid_argument("unknown parameter(s) " + unknown + " (accepted in '" + section_ +
+                              "': " + accepted + ")");
 }
 
 void RosParameterReader::Visit(const std::string& key, int* value) {

@@ -2,6 +2,7 @@
 
 // Options of the core library's modules from ROS parameters, for the nodelets.
 
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -14,7 +15,9 @@ namespace stereo_fabmap_slam::ros_parameters {
 
 // Fills Options fields from ROS parameters "<namespace>/<section>/<key>" (e.g. the private
 // "~features/max_features" after `rosparam load config/euroc.yaml`); absent parameters keep the
-// default, a parameter of the wrong type throws std::invalid_argument naming it.
+// default, a parameter of the wrong type throws std::invalid_argument naming it. Like a YAML
+// section, a key the Options do not have is refused (RejectUnknownKeys): a misspelt
+// "~features/max_featurs" must not be silently ignored.
 class RosParameterReader : public io::OptionVisitor {
  public:
   RosParameterReader(const ros::NodeHandle& node, const std::string& section);
@@ -22,6 +25,9 @@ class RosParameterReader : public io::OptionVisitor {
   void Visit(const std::string& key, int* value) override;
   void Visit(const std::string& key, bool* value) override;
   void Visit(const std::string& key, std::string* value) override;
+  // After Visit: throws std::invalid_argument naming the parameters under "<section>/" that
+  // no visited field has, with the accepted keys.
+  void RejectUnknownKeys() const;
 
  private:
   template <typename T>
@@ -29,6 +35,7 @@ class RosParameterReader : public io::OptionVisitor {
 
   ros::NodeHandle node_;
   std::string section_;
+  std::set<std::string> visited_;
 };
 
 // One module's options for a nodelet: its section of the YAML file in ~config_file (if set),
@@ -42,6 +49,7 @@ Options ReadModuleOptions(const ros::NodeHandle& private_node, Options options =
   }
   RosParameterReader reader(private_node, Options::kSection);
   options.Visit(reader);
+  reader.RejectUnknownKeys();
   options.Validate();
   return options;
 }

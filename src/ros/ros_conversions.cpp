@@ -51,6 +51,27 @@ sensor_msgs::ImagePtr ToMono8ImageMessage(const cv::Mat& image, const ros::Time&
   return cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, image).toImageMsg();
 }
 
+std::string MalformedImageReason(const sensor_msgs::Image& image) {
+  if (image.width == 0 || image.height == 0) return "no pixels (0 wide or high)";
+  const std::size_t needed = static_cast<std::size_t>(image.step) * image.height;
+  if (image.data.size() < needed) {
+    return std::to_string(image.data.size()) + " bytes of data for " +
+           std::to_string(image.height) + " rows of " + std::to_string(image.step) + " bytes";
+  }
+  try {
+    const std::size_t row = static_cast<std::size_t>(image.width) *
+                            sensor_msgs::image_encodings::numChannels(image.encoding) *
+                            sensor_msgs::image_encodings::bitDepth(image.encoding) / 8;
+    if (image.step < row) {
+      return "a step of " + std::to_string(image.step) + " bytes for rows of " +
+             std::to_string(row) + " bytes (" + image.encoding + ")";
+    }
+  } catch (const std::runtime_error&) {
+    // An encoding sensor_msgs does not know: its row size cannot be checked here.
+  }
+  return "";
+}
+
 geometry_msgs::Pose ToPoseMessage(const Eigen::Isometry3d& pose) { return tf2::toMsg(pose); }
 
 Eigen::Isometry3d FromPoseMessage(const geometry_msgs::Pose& pose) {

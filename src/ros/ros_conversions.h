@@ -33,6 +33,11 @@ std::int64_t ToNanoseconds(const ros::Time& time);
 sensor_msgs::ImagePtr ToMono8ImageMessage(const cv::Mat& image, const ros::Time& stamp,
                                           const std::string& frame_id);
 
+// Why an image message cannot be what it says (its data shorter than step x height, a step
+// shorter than a row, no pixels), or "" if it is consistent. Encodings whose pixel size is
+// unknown are checked for size only; whether cv_bridge can convert them is another question.
+std::string MalformedImageReason(const sensor_msgs::Image& image);
+
 geometry_msgs::Pose ToPoseMessage(const Eigen::Isometry3d& pose);
 Eigen::Isometry3d FromPoseMessage(const geometry_msgs::Pose& pose);
 geometry_msgs::Transform ToTransformMessage(const Eigen::Isometry3d& transform);

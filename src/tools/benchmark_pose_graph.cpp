@@ -11,13 +11,14 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "command_line.h"
 #include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/map/loop_edge.h"
 
@@ -132,27 +133,46 @@ double Median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-int Fail(const char* message) {
-  std::fprintf(stderr,
-               "%s\nusage: benchmark_pose_graph [--keyframes N] [--loops M] "
-               "[--repetitions R]\n",
-               message);
+constexpr char kUsage[] =
+    "usage: benchmark_pose_graph [--keyframes N] [--loops M] [--repetitions R]\n"
+    "Times the pose graph on a simulated run of N keyframes (default 1000) with M loop edges\n"
+    "(default 50), R times (default 7): batch and incremental optimisation, error before and\n"
+    "after. Prints the figures of docs/benchmarks.md.\n";
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "benchmark_pose_graph: %s\n%s", message.c_str(), kUsage);
   return 2;
+}
+
+// A whole number of at least `minimum` from --name (or the fallback).
+int WholeNumber(const stereo_fabmap_slam::tools::CommandLine& args, const std::string& name,
+                int fallback, int minimum) {
+  const double value = args.NumberOr(name, fallback);
+  if (value != static_cast<double>(static_cast<int>(value)) || value < minimum) {
+    throw std::invalid_argument("--" + name +
+                                " must be a whole number >= " + std::to_string(minimum));
+  }
+  return static_cast<int>(value);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   int keyframes = 1000, loops = 50, repetitions = 7;
-  for (int i = 1; i < argc; ++i) {
-    int* target = nullptr;
-    if (!std::strcmp(argv[i], "--keyframes")) target = &keyframes;
-    if (!std::strcmp(argv[i], "--loops")) target = &loops;
-    if (!std::strcmp(argv[i], "--repetitions")) target = &repetitions;
-    if (!target || i + 1 >= argc) return Fail("unknown argument or missing value");
-    *target = std::atoi(argv[++i]);
+  try {
+    const stereo_fabmap_slam::tools::CommandLine args(
+        argc, argv, {"keyframes", "loops", "repetitions"}, {"help"});
+    if (args.Flag("help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (!args.positional().empty()) throw std::invalid_argument("no positional arguments");
+    keyframes = WholeNumber(args, "keyframes", keyframes, 1);
+    loops = WholeNumber(args, "loops", loops, 0);
+    repetitions = WholeNumber(args, "repetitions", repetitions, 1);
+  } catch (const std::invalid_argument& error) {
+    return Fail(error.what());
   }
-  if (keyframes < 1 || loops < 0 || repetitions < 1) return Fail("values must be positive");
   if (loops > keyframes - kKeyframesPerLap - 2) return Fail("too few keyframes for the loops");
 
   std::mt19937 random(42);

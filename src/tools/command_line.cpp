@@ -1,5 +1,6 @@
 #include "command_line.h"
 
+#include <cctype>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -9,6 +10,16 @@ CommandLine::CommandLine(int argc, char** argv, const std::set<std::string>& val
                          const std::set<std::string>& flags) {
   for (int i = 1; i < argc; ++i) {
     const std::string argument = argv[i];
+    if (argument == "-h" && flags.count("help")) {
+      flags_.insert("help");
+      continue;
+    }
+    // A single dash with a letter is an option nobody offers ("-o"), not a file; a lone "-" or
+    // a negative number stays positional.
+    if (argument.size() >= 2 && argument[0] == '-' && argument[1] != '-' &&
+        !std::isdigit(static_cast<unsigned char>(argument[1])) && argument[1] != '.') {
+      throw std::invalid_argument("unknown option " + argument);
+    }
     if (argument.rfind("--", 0) != 0 || argument.size() == 2) {
       positional_.push_back(argument);
       continue;

@@ -8,8 +8,9 @@
 
 namespace stereo_fabmap_slam::tools {
 
-// GNU-style arguments: "--name value", "--name=value", "--flag", and positional arguments.
-// Unknown options and missing values throw std::invalid_argument with a readable message.
+// GNU-style arguments: "--name value", "--name=value", "--flag", and positional arguments;
+// "-h" is "--help" where the tool offers it. Unknown options (also "-x") and missing values
+// throw std::invalid_argument with a readable message.
 class CommandLine {
  public:
   CommandLine(int argc, char** argv, const std::set<std::string>& value_options,

@@ -73,8 +73,10 @@ int main(int argc, char** argv) {
         place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), fabmap_options,
         place_recognition::PlaceDatabase::Load(directory + "/training_places.bin"));
     place_recognition::ImageDescriber describer(options.features);
+    // Listed first: a source without images is an error, without a CSV header on stdout.
+    const std::vector<tools::ImageSource> images = tools::ListImages(args->positional()[0], every);
     std::printf("image,timestamp,place,best_place,best_posterior,new_place_probability\n");
-    for (const tools::ImageSource& image : tools::ListImages(args->positional()[0], every)) {
+    for (const tools::ImageSource& image : images) {
       const cv::Mat pixels = cv::imread(image.path, cv::IMREAD_GRAYSCALE);
       if (pixels.empty()) throw std::runtime_error(image.path + ": cannot read image");
       int place = -1;

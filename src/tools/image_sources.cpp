@@ -17,6 +17,7 @@ std::vector<ImageSource> ListImages(const std::string& source, int every) {
     for (std::size_t i = 0; i < sequence.size(); i += step) {
       images.push_back({sequence.frames()[i].left_path, sequence.frames()[i].timestamp_ns * 1e-9});
     }
+    if (images.empty()) throw std::runtime_error(source + ": the sequence has no images");
     return images;
   }
   if (!fs::is_directory(source)) throw std::runtime_error(source + ": no such folder");
@@ -29,6 +30,7 @@ std::vector<ImageSource> ListImages(const std::string& source, int every) {
   std::sort(paths.begin(), paths.end());
   for (std::size_t i = 0; i < paths.size(); i += step)
     images.push_back({paths[i], static_cast<double>(i)});
+  if (images.empty()) throw std::runtime_error(source + ": no images (*.png, *.jpg, *.jpeg)");
   return images;
 }
 

@@ -14,7 +14,7 @@ namespace {
 using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 
 constexpr char kUsage[] =
-    "usage: make_synthetic_sequence --out DIR [--seed N] [--route loop|figure8|kidnap]\n"
+    "usage: make_synthetic_sequence --output DIR [--seed N] [--route loop|figure8|kidnap]\n"
     "                               [--seconds S] [--noise SIGMA] [--no-distortion]\n"
     "                               [--exposure-changes] [--motion-blur] [--photos FOLDER] "
     "[--no-bag]\n"
@@ -33,16 +33,16 @@ int main(int argc, char** argv) {
   std::string out;
   try {
     args.emplace(argc, argv,
-                 std::set<std::string>{"out", "seed", "route", "seconds", "noise", "photos"},
+                 std::set<std::string>{"output", "seed", "route", "seconds", "noise", "photos"},
                  std::set<std::string>{"no-distortion", "exposure-changes", "motion-blur", "no-bag",
                                        "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    if (!args->Value("out") || !args->positional().empty())
-      throw std::invalid_argument("--out DIR is required");
-    out = *args->Value("out");
+    if (!args->Value("output") || !args->positional().empty())
+      throw std::invalid_argument("--output DIR is required");
+    out = *args->Value("output");
     const double seed = args->NumberOr("seed", 1);
     if (seed < 0 || seed != static_cast<double>(static_cast<std::uint64_t>(seed))) {
       throw std::invalid_argument("--seed must be a whole number >= 0");

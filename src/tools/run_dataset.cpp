@@ -307,25 +307,39 @@ int main(int argc, char** argv) {
                   relocalizations, attempts, frames_lost, Summarise(relocalization_ms).median,
                   trajectory.size());
     json += buffer;
+    // Ground truth is the body frame: move it to the rectified left camera we estimate. The ATE
+    // needs 3 poses matched to it; with fewer (a sequence of one or two frames, a map that never
+    // found the camera, ground truth that does not cover the images) the outputs are written all
+    // the same and the summary says why there is no ATE.
+    const evaluation::Trajectory truth =
+        sequence.has_ground_truth()
+            ? evaluation::TransformToSensorFrame(sequence.ground_truth(),
+                                                 rectifier.T_body_rectified_left())
+            : evaluation::Trajectory{};
+    const auto evaluate =
+        [&](const evaluation::Trajectory& estimate) -> std::optional<evaluation::EvaluationResult> {
+      try {
+        return evaluation::EvaluateTrajectory(truth, estimate, evaluation::EvaluationOptions{});
+      } catch (const std::invalid_argument& error) {
+        if (!quiet) std::fprintf(stderr, "run_dataset: no ATE: %s\n", error.what());
+        return std::nullopt;
+      }
+    };
     if (sequence.has_ground_truth()) {
-      // Ground truth is the body frame: move it to the rectified left camera we estimate.
-      const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
-          sequence.ground_truth(), rectifier.T_body_rectified_left());
-      const evaluation::EvaluationResult odometry_result = evaluation::EvaluateTrajectory(
-          truth, odometry_trajectory, evaluation::EvaluationOptions{});
-      std::snprintf(buffer, sizeof(buffer), ", \"ate_rmse_odometry\": %.6f",
-                    odometry_result.ate.rmse);
-      json += buffer;
+      if (const auto odometry_result = evaluate(odometry_trajectory)) {
+        std::snprintf(buffer, sizeof(buffer), ", \"ate_rmse_odometry\": %.6f",
+                      odometry_result->ate.rmse);
+        json += buffer;
+      }
     }
-    // The map trajectory can be (nearly) empty: localization in a map that never finds the
-    // camera (another building) gives no pose in the map at all.
-    if (sequence.has_ground_truth() && trajectory.size() < 3) {
-      json += ", \"ate_matched\": 0, \"ate_note\": \"fewer than 3 frames have a pose in the map\"";
-    } else if (sequence.has_ground_truth()) {
-      const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
-          sequence.ground_truth(), rectifier.T_body_rectified_left());
-      const evaluation::EvaluationResult result =
-          evaluation::EvaluateTrajectory(truth, trajectory, evaluation::EvaluationOptions{});
+    const std::optional<evaluation::EvaluationResult> evaluated =
+        sequence.has_ground_truth() ? evaluate(trajectory) : std::nullopt;
+    if (sequence.has_ground_truth() && !evaluated) {
+      json +=
+          ", \"ate_matched\": 0, \"ate_note\": \"the ATE needs at least 3 poses matched to the "
+          "ground truth\"";
+    } else if (evaluated) {
+      const evaluation::EvaluationResult& result = *evaluated;
       const auto& est = result.aligned_estimate;
       const auto& ref = result.matched_reference;
       const Eigen::Vector3d est_move =

@@ -5,11 +5,13 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <cv_bridge/cv_bridge.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/image_encodings.h>
 #include <opencv2/imgproc.hpp>
 
@@ -65,6 +67,15 @@ class BadInputTest : public ::testing::Test {
     Send(images.left, images.right, sensor_msgs::image_encodings::MONO8, stamp_ns);
   }
 
+  // Whether a log message of the graph (/rosout) contained `text`.
+  bool Logged(const std::string& text) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const std::string& message : log_) {
+      if (message.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+
   bool HasOdometry(std::int64_t stamp_ns) {
     std::lock_guard<std::mutex> lock(mutex_);
     return stamps_.count(stamp_ns) > 0;
@@ -74,9 +85,15 @@ class BadInputTest : public ::testing::Test {
   ros::NodeHandle node_;
   ros::Publisher left_, right_;
   ros::Subscriber odometry_;
+  ros::Subscriber log_subscriber_ = node_.subscribe<rosgraph_msgs::Log>(
+      "/rosout", 100, [this](const rosgraph_msgs::LogConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        log_.push_back(m->msg);
+      });
   ros::AsyncSpinner spinner_{1};
   std::mutex mutex_;
   std::set<std::int64_t> stamps_;
+  std::vector<std::string> log_;
 };
 
 TEST_F(BadInputTest, WarnsSkipsAndKeepsTracking) {
@@ -102,6 +119,20 @@ TEST_F(BadInputTest, WarnsSkipsAndKeepsTracking) {
   Send(left_float, right_float, sensor_msgs::image_encodings::TYPE_32FC1, t);
   EXPECT_FALSE(HasOdometry(t));
   t += step;
+
+  // A malformed image (half its data missing): skipped, and said so, not called an encoding.
+  {
+    sensor_msgs::ImagePtr broken =
+        Message(frame5.left, sensor_msgs::image_encodings::MONO8, t, "cam0");
+    broken->data.resize(broken->data.size() / 2);
+    left_.publish(broken);
+    right_.publish(Message(frame5.right, sensor_msgs::image_encodings::MONO8, t, "cam1"));
+    ros::WallDuration(0.3).sleep();
+    EXPECT_FALSE(HasOdometry(t));
+    EXPECT_TRUE(Logged("malformed image on left/image_raw: 180480 bytes of data for 480 rows"));
+    EXPECT_FALSE(Logged("unsupported image encoding (mono8"));
+    t += step;
+  }
 
   // A size the calibration does not describe: skipped.
   cv::Mat small_left, small_right;

@@ -34,7 +34,7 @@ TEST(LoopClosingRos, RenderedLoopThroughTheNodelets) {
   const std::string sequence = temp.path() + "/loop";
   std::string output;
   // 34 s of the "loop" route: back past the start from about 26 s on.
-  ASSERT_EQ(RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --out " + sequence +
+  ASSERT_EQ(RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --output " + sequence +
                            " --route loop --seconds 34 --seed 1 2>&1",
                        &output),
             0)

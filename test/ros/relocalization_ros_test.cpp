@@ -59,7 +59,7 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
   TemporaryDirectory temp;
   const std::string sequence = temp.path() + "/kidnap";
   std::string output;
-  ASSERT_EQ(RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --out " + sequence +
+  ASSERT_EQ(RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --output " + sequence +
                            " --route kidnap --seconds 40 --seed 2 2>&1",
                        &output),
             0)

@@ -4,6 +4,7 @@
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <sstream>
 
@@ -95,9 +96,42 @@ TEST(Configuration, BadFilesNameTheProblem) {
   error = ErrorOf([&] { tools::SlamConfiguration::Load(path); });
   EXPECT_NE(error.find("backend.window"), std::string::npos) << error;
 
-  WriteTextFile(path, "include: missing.yaml\n");
+  WriteTextFile(path, "# a preset\ninclude: missing.yaml\n");
   error = ErrorOf([&] { tools::SlamConfiguration::Load(path); });
   EXPECT_NE(error.find("missing.yaml: cannot open file"), std::string::npos) << error;
+  EXPECT_NE(error.find("included from " + path + ":2"), std::string::npos) << error;
+}
+
+// A bad calibration value is reported at its own line, not at its section's first line.
+TEST(Configuration, BadCalibrationValuesNameTheirLine) {
+  const std::string original = ReadTextFile(RepositoryRoot() + "/config/euroc_stereo.yaml");
+  TemporaryDirectory temp;
+  const std::string path = temp.path() + "/calibration.yaml";
+  const auto line_of = [&](const std::string& text, const std::string& needle, std::size_t from) {
+    const std::size_t at = text.find(needle, from);
+    return 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+  };
+  const std::size_t right = original.find("right:");
+  struct Case {
+    std::string from, to, reason;
+    std::size_t search_from;
+  };
+  for (const Case& c :
+       {Case{"intrinsics: [458.654", "intrinsics: [-458.654", "focal lengths must be positive", 0},
+        Case{"distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, "
+             "1.76187114e-05]",
+             "distortion_coefficients: [-0.28340811, 0.07395907]", "4 or 5 coefficients", 0},
+        Case{"resolution: [752, 480]", "resolution: [640, 480]", "same resolution", right}}) {
+    std::string text = original;
+    const std::size_t at = text.find(c.from, c.search_from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, c.from.size(), c.to);
+    WriteTextFile(path, text);
+    const std::string error = ErrorOf([&] { camera::ReadStereoCalibrationYaml(path); });
+    const std::string where = path + ":" + std::to_string(line_of(text, c.to, c.search_from)) + ":";
+    EXPECT_NE(error.find(where), std::string::npos) << where << " not in: " << error;
+    EXPECT_NE(error.find(c.reason), std::string::npos) << error;
+  }
 }
 
 }  // namespace

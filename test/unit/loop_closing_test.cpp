@@ -35,7 +35,7 @@ Eigen::Vector3d PositionAt(const evaluation::Trajectory& truth, double time) {
 std::string RenderAndRun(const TemporaryDirectory& temp, const std::string& route, int seconds,
                          int seed) {
   std::string output;
-  if (RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --out " + temp.path() +
+  if (RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --output " + temp.path() +
                      "/sequence --route " + route + " --seconds " + std::to_string(seconds) +
                      " --seed " + std::to_string(seed) + " --no-bag 2>&1",
                  &output) != 0 ||

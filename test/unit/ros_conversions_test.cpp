@@ -18,6 +18,27 @@ TEST(RosConversions, TimeKeepsNanoseconds) {
   EXPECT_EQ(ToRosTime(stamp).nsec, 763555584u);
 }
 
+TEST(RosConversions, MalformedImagesAreToldApart) {
+  cv::Mat image(48, 64, CV_8UC1, cv::Scalar(7));
+  sensor_msgs::ImagePtr message = ToMono8ImageMessage(image, ToRosTime(5), "cam0");
+  EXPECT_EQ(MalformedImageReason(*message), "");
+  sensor_msgs::Image truncated = *message;
+  truncated.data.resize(truncated.data.size() / 2);
+  EXPECT_NE(MalformedImageReason(truncated).find("1536 bytes of data for 48 rows of 64 bytes"),
+            std::string::npos)
+      << MalformedImageReason(truncated);
+  sensor_msgs::Image short_step = *message;
+  short_step.encoding = "bgr8";  // 64 pixels of 3 bytes need 192 bytes a row
+  EXPECT_NE(MalformedImageReason(short_step).find("step of 64 bytes for rows of 192"),
+            std::string::npos);
+  sensor_msgs::Image empty = *message;
+  empty.width = 0;
+  EXPECT_NE(MalformedImageReason(empty), "");
+  sensor_msgs::Image odd = *message;
+  odd.encoding = "my_own_format";  // unknown to sensor_msgs: size checked only
+  EXPECT_EQ(MalformedImageReason(odd), "");
+}
+
 TEST(RosConversions, PoseRoundTrip) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
