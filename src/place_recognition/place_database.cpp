@@ -121,7 +121,13 @@ void PlaceDatabase::Save(const std::string& path) const {
 PlaceDatabase PlaceDatabase::Load(const std::string& path) {
   io::BinaryReader reader = io::ReadBinaryFile(path, kMagic, kVersion);
   const auto vocabulary = reader.Get<std::int32_t>();
-  if (vocabulary < 1) reader.Fail("bad vocabulary size");
+  // The index has an entry per word, allocated up front: a corrupt size must not ask for
+  // gigabytes. FAB-MAP vocabularies have thousands to a hundred thousand words (the default
+  // 10,000); a million is far beyond any and still only tens of megabytes of index.
+  constexpr std::int32_t kMaxVocabularySize = 1'000'000;
+  if (vocabulary < 1 || vocabulary > kMaxVocabularySize) {
+    reader.Fail("bad vocabulary size " + std::to_string(vocabulary));
+  }
   PlaceDatabase database(vocabulary);
   const auto count = reader.Get<std::uint64_t>();
   for (std::uint64_t i = 0; i < count; ++i) {

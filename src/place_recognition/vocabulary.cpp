@@ -236,9 +236,14 @@ Vocabulary Vocabulary::Load(const std::string& path) {
   if ((type != CV_8U && type != CV_32F) || rows < 1 || cols < 1)
     reader.Fail("bad centre matrix header");
   const std::vector<std::uint8_t> data = reader.GetVector<std::uint8_t>();
-  vocabulary.centres_ = cv::Mat(rows, cols, type);
-  if (data.size() != vocabulary.centres_.total() * vocabulary.centres_.elemSize())
+  // The header's size must match the data read before anything of that size is allocated: a
+  // corrupt header must not ask for gigabytes.
+  const std::uint64_t element_bytes = type == CV_8U ? 1 : 4;
+  if (static_cast<std::uint64_t>(rows) * static_cast<std::uint64_t>(cols) * element_bytes !=
+      data.size()) {
     reader.Fail("centre data size");
+  }
+  vocabulary.centres_ = cv::Mat(rows, cols, type);
   std::memcpy(vocabulary.centres_.data, data.data(), data.size());
   vocabulary.nodes_ = reader.GetVector<Node>();
   vocabulary.word_count_ = reader.Get<std::int32_t>();

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
 
+#include "file_mutations.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/io/input_error.h"
 #include "stereo_fabmap_slam/io/options_file.h"
@@ -492,6 +493,38 @@ TEST(FabMapFiles, RoundTripsExactlyAndRefusesDamage) {
             std::string::npos);
   // The failed loads left the loaded state as it was.
   EXPECT_TRUE(loaded == places);
+}
+
+// 2,000 mutants each of a vocabulary, a Chow-Liu tree and a place database (bit flips,
+// truncations, appended bytes, and payload changes that pass the checksum): refused with an
+// InputError or loaded, none crashing, hanging or allocating more than 256 MB.
+TEST(FabMapFiles, FuzzedFilesAreRefusedOrLoadedNeverCrash) {
+  TemporaryDirectory temp;
+  cv::Mat descriptors(400, 32, CV_8U);
+  cv::randu(descriptors, 0, 256);
+  VocabularyOptions options;
+  options.branching = 4;
+  options.depth = 3;
+  Vocabulary::Train(descriptors, options).Save(temp.path() + "/v.bin");
+  ToyTree().Save(temp.path() + "/t.bin");
+  PlaceDatabase places(6);
+  places.AddPlace({0, 3});
+  places.UpdatePlace(0, {3, 5});
+  places.AddPlace({1, 2, 4});
+  places.Save(temp.path() + "/p.bin");
+  const std::size_t bound = 256u << 20;
+  const FuzzCounts vocabulary = LoadMutants(temp.path() + "/v.bin", 2000, 21, bound,
+                                            [](const std::string& p) { Vocabulary::Load(p); });
+  const FuzzCounts tree = LoadMutants(temp.path() + "/t.bin", 2000, 22, bound,
+                                      [](const std::string& p) { ChowLiuTree::Load(p); });
+  const FuzzCounts database = LoadMutants(temp.path() + "/p.bin", 2000, 23, bound,
+                                          [](const std::string& p) { PlaceDatabase::Load(p); });
+  for (const FuzzCounts& counts : {vocabulary, tree, database}) {
+    EXPECT_GE(counts.refused, 1200);  // every mutant whose checksum was not fixed, at least
+  }
+  RecordProperty("vocabulary_loaded", vocabulary.loaded);
+  RecordProperty("tree_loaded", tree.loaded);
+  RecordProperty("places_loaded", database.loaded);
 }
 
 TEST(Vocabulary, QuantisesToTheNearestWordAndTrainsOnFloatDescriptors) {
