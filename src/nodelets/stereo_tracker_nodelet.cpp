@@ -12,6 +12,8 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <cv_bridge/cv_bridge.h>
@@ -54,6 +56,12 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
  public:
   ~StereoTrackerNodelet() override {
     if (service_spinner_) service_spinner_->stop();  // before the members its callback uses
+    {
+      std::lock_guard<std::mutex> lock(pair_mutex_);
+      stopping_ = true;
+    }
+    pair_ready_.notify_all();
+    if (worker_.joinable()) worker_.join();
   }
 
  private:
@@ -71,7 +79,12 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
                      const Eigen::Isometry3d& T_base_body);
   void OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& left,
                     const sensor_msgs::CameraInfoConstPtr& right);
+  // The synchroniser's callback: hands the pair to the worker, or drops it when the worker is
+  // still busy with the one before (whole pairs only, the newest first).
   void OnImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
+  // The worker thread: tracks pairs one at a time.
+  void Work();
+  void ProcessPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
   void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
   // Counts images of one side; warns when more go unpaired than the sync queue can hold.
   void OnSingleImage(std::atomic<std::uint64_t>* count);
@@ -97,6 +110,20 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   ros::Time last_stamp_;
   int queue_size_ = 10;
   std::atomic<std::uint64_t> left_images_{0}, right_images_{0}, pairs_{0};
+
+  // Between the synchroniser and the worker: at most one pair waits while one is tracked, so
+  // that a tracker slower than the camera (a bag played fast, a busy machine) skips pairs
+  // instead of falling ever further behind, and the subscribers' queues never overflow (which
+  // would drop a left image without its right). Skipped pairs are counted and reported once a
+  // second.
+  std::mutex pair_mutex_;
+  std::condition_variable pair_ready_;
+  std::optional<std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>> waiting_pair_;
+  bool stopping_ = false;
+  std::uint64_t skipped_pairs_ = 0, skipped_reported_ = 0;
+  ros::WallTime last_skip_report_;
+  double last_frame_ms_ = 0;  // the last pair's tracking time, for the report
+  std::thread worker_;
 
   // Images through image_transport: ~image_transport (raw by default) picks the transport, so a
   // compressed stream works where its plugin is installed.
@@ -322,6 +349,7 @@ void StereoTrackerNodelet::onInit() {
         ExactPolicy(queue_size), left_subscriber_, right_subscriber_);
     exact_sync_->registerCallback(&StereoTrackerNodelet::OnImages, this);
   }
+  worker_ = std::thread(&StereoTrackerNodelet::Work, this);
   NODELET_INFO_STREAM("tracking " << left_subscriber_.getTopic() << " + "
                                   << right_subscriber_.getTopic()
                                   << (approximate ? " (approximate" : " (exact") << " time sync)");
@@ -372,6 +400,52 @@ void StereoTrackerNodelet::OnSingleImage(std::atomic<std::uint64_t>* count) {
 void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_message,
                                     const sensor_msgs::ImageConstPtr& right_message) {
   ++pairs_;
+  std::uint64_t skipped_since_report = 0;
+  double frame_ms = 0;
+  {
+    std::lock_guard<std::mutex> lock(pair_mutex_);
+    if (waiting_pair_) {
+      ++skipped_pairs_;  // the worker has not taken the last one yet: this one is dropped
+    } else {
+      waiting_pair_.emplace(left_message, right_message);
+    }
+    const ros::WallTime now = ros::WallTime::now();
+    if (skipped_pairs_ > skipped_reported_ && (now - last_skip_report_).toSec() >= 1.0) {
+      skipped_since_report = skipped_pairs_ - skipped_reported_;
+      skipped_reported_ = skipped_pairs_;
+      last_skip_report_ = now;
+      frame_ms = last_frame_ms_;
+    }
+  }
+  pair_ready_.notify_one();
+  if (skipped_since_report > 0) {
+    NODELET_WARN(
+        "skipped %lu stereo pair(s) in the last second: the tracker was still busy "
+        "(%.0f ms for its last pair); %lu skipped in all",
+        static_cast<unsigned long>(skipped_since_report), frame_ms,
+        static_cast<unsigned long>(skipped_reported_));
+  }
+}
+
+void StereoTrackerNodelet::Work() {
+  while (true) {
+    std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr> pair;
+    {
+      std::unique_lock<std::mutex> lock(pair_mutex_);
+      pair_ready_.wait(lock, [&] { return stopping_ || waiting_pair_.has_value(); });
+      if (stopping_) return;
+      pair = std::move(*waiting_pair_);
+      waiting_pair_.reset();
+    }
+    const double start = SteadyMilliseconds();
+    ProcessPair(pair.first, pair.second);
+    std::lock_guard<std::mutex> lock(pair_mutex_);
+    last_frame_ms_ = SteadyMilliseconds() - start;
+  }
+}
+
+void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_message,
+                                       const sensor_msgs::ImageConstPtr& right_message) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!front_end_) {
     NODELET_WARN_THROTTLE(5, "no calibration yet (waiting for camera_info); frame skipped");

@@ -1,0 +1,116 @@
+// The graph under load and split over processes, on MH01_first10s (200 pairs, 10 s):
+// - at 5x real time the tracker cannot keep up on this machine (about 30 ms a pair against
+//   10 ms between pairs): it skips whole pairs, reports them once a second, and still makes
+//   the keyframes of a 1x run and a trajectory close to it;
+// - every nodelet standalone (its own process, messages serialised) gives the trajectory of
+//   the single manager.
+#include <map>
+#include <mutex>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <stereo_fabmap_slam/Keyframe.h>
+
+#include "ros_conversions.h"
+#include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+struct GraphRun {
+  evaluation::Trajectory odometry;  // in time order
+  int keyframes = 0;
+  std::string log;
+};
+
+// Plays the bag through euroc_bag.launch with `arguments` and collects what the graph publishes.
+GraphRun PlayBag(const std::string& bag, const std::string& arguments,
+                 const std::string& log_path) {
+  std::mutex mutex;
+  std::map<std::int64_t, Eigen::Isometry3d> odometry;
+  GraphRun run;
+  ros::NodeHandle node;
+  const ros::Subscriber odometry_subscriber = node.subscribe<nav_msgs::Odometry>(
+      "/odometry", 1000, [&](const nav_msgs::OdometryConstPtr& message) {
+        std::lock_guard<std::mutex> lock(mutex);
+        odometry[ros_conversions::ToNanoseconds(message->header.stamp)] =
+            ros_conversions::FromPoseMessage(message->pose.pose);
+      });
+  const ros::Subscriber keyframe_subscriber = node.subscribe<stereo_fabmap_slam::Keyframe>(
+      "/keyframes", 1000, [&](const stereo_fabmap_slam::KeyframeConstPtr&) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++run.keyframes;
+      });
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int status = std::system(("roslaunch --wait stereo_fabmap_slam euroc_bag.launch "
+                                  "exit_at_end:=true visualizer:=false bag:=" +
+                                  bag + " " + arguments + " > " + log_path + " 2>&1")
+                                     .c_str());
+  ros::WallDuration(1.0).sleep();
+  spinner.stop();
+  run.log = ReadTextFile(log_path);
+  EXPECT_EQ(status, 0) << run.log;
+  std::lock_guard<std::mutex> lock(mutex);
+  for (const auto& [stamp, pose] : odometry) run.odometry.push_back({stamp * 1e-9, pose});
+  return run;
+}
+
+// ATE of `estimate` against `reference` (both odometry, the same frames where both have them).
+double AteBetween(const evaluation::Trajectory& reference, const evaluation::Trajectory& estimate) {
+  evaluation::EvaluationOptions options;
+  options.max_dt = 1e-4;  // the same image stamps
+  return evaluation::EvaluateTrajectory(reference, estimate, options).ate.rmse;
+}
+
+TEST(Load, FastPlaybackAndSeparateProcesses) {
+  TemporaryDirectory temp;
+  const std::string bag = temp.path() + "/mh01.bag";
+  std::string output;
+  ASSERT_EQ(RunCommand(std::string(EUROC_TO_BAG_BIN) + " " + EurocSequencePath("MH01_first10s") +
+                           " " + bag + " 2>&1",
+                       &output),
+            0)
+      << output;
+
+  const GraphRun real_time = PlayBag(bag, "rate:=1", temp.path() + "/1x.log");
+  RecordProperty("odometry_1x", static_cast<int>(real_time.odometry.size()));
+  RecordProperty("keyframes_1x", real_time.keyframes);
+  EXPECT_GE(real_time.odometry.size(), 198u) << real_time.log;  // every pair but a startup one
+  EXPECT_EQ(real_time.log.find("skipped"), std::string::npos) << "1x keeps up:\n" << real_time.log;
+
+  const GraphRun fast = PlayBag(bag, "rate:=5", temp.path() + "/5x.log");
+  RecordProperty("odometry_5x", static_cast<int>(fast.odometry.size()));
+  RecordProperty("keyframes_5x", fast.keyframes);
+  EXPECT_NE(fast.log.find("stereo pair(s) in the last second: the tracker was still busy"),
+            std::string::npos)
+      << fast.log;
+  EXPECT_EQ(fast.log.find("tracking lost"), std::string::npos) << fast.log;
+  EXPECT_EQ(fast.log.find("do not synchronise"), std::string::npos) << "never half a pair";
+  // The keyframe count of one bag varies by one between two 1x runs already (30 and 31 seen:
+  // Backend updates arrive at slightly different frames); skipped pairs may move a decision by
+  // a frame too. Two fewer would be a real loss.
+  EXPECT_GE(fast.keyframes + 2, real_time.keyframes);
+  const double fast_ate = AteBetween(real_time.odometry, fast.odometry);
+  RecordProperty("ate_5x_against_1x_m", std::to_string(fast_ate));
+  EXPECT_LT(fast_ate, 0.01);
+
+  const GraphRun split = PlayBag(bag, "rate:=1 standalone:=true", temp.path() + "/standalone.log");
+  RecordProperty("odometry_standalone", static_cast<int>(split.odometry.size()));
+  EXPECT_GE(split.odometry.size(), 198u) << split.log;
+  const double split_ate = AteBetween(real_time.odometry, split.odometry);
+  RecordProperty("ate_standalone_against_manager_m", std::to_string(split_ate));
+  EXPECT_LT(split_ate, 0.005);
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "load_test");
+  return RUN_ALL_TESTS();
+}
