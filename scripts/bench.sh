@@ -49,3 +49,8 @@ echo
 echo "place recognition (build/bin/benchmark_fabmap: synthetic words, fixed seeds, one core):"
 echo
 build/bin/benchmark_fabmap
+
+echo
+echo "the ROS graph, per nodelet (scripts/bench_nodelets.sh):"
+echo
+bash scripts/bench_nodelets.sh
