@@ -8,6 +8,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -86,8 +87,9 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   void Work();
   void ProcessPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
   void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
-  // Counts images of one side; warns when more go unpaired than the sync queue can hold.
-  void OnSingleImage(std::atomic<std::uint64_t>* count);
+  // Counts images of one side (0 left, 1 right); warns when more go unpaired than the sync
+  // queue can hold, and when the other camera has been silent for a second (a dropout).
+  void OnSingleImage(int side);
   void Publish(const ros::Time& stamp, const odometry::TrackingResult& result);
   // After tracking: attempts a relocalization if one is due (recovery after a loss, or a user's
   // request), and answers the request. Call with mutex_.
@@ -110,6 +112,13 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   ros::Time last_stamp_;
   int queue_size_ = 10;
   std::atomic<std::uint64_t> left_images_{0}, right_images_{0}, pairs_{0};
+  // Wall time [s] of each side's latest image, for telling a camera that dropped out.
+  std::atomic<double> last_arrival_[2] = {0.0, 0.0};
+  std::atomic<bool> dropout_reported_{false};
+  // The last tracked pair's images (shared with their messages), for telling a frozen camera:
+  // the same image again under a new stamp. Worker thread only.
+  cv_bridge::CvImageConstPtr previous_left_, previous_right_;
+  int frozen_frames_ = 0;
 
   // Between the synchroniser and the worker: at most one pair waits while one is tracked, so
   // that a tracker slower than the camera (a bag played fast, a busy machine) skips pairs
@@ -337,9 +346,9 @@ void StereoTrackerNodelet::onInit() {
   left_subscriber_.subscribe(*image_transport_, "left/image_raw", queue_size, hints);
   right_subscriber_.subscribe(*image_transport_, "right/image_raw", queue_size, hints);
   left_subscriber_.registerCallback(
-      [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(&left_images_); });
+      [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(0); });
   right_subscriber_.registerCallback(
-      [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(&right_images_); });
+      [this](const sensor_msgs::ImageConstPtr&) { OnSingleImage(1); });
   if (approximate) {
     approximate_sync_ = std::make_unique<message_filters::Synchronizer<ApproximatePolicy>>(
         ApproximatePolicy(queue_size), left_subscriber_, right_subscriber_);
@@ -385,8 +394,24 @@ void StereoTrackerNodelet::StartFrontEnd(const camera::StereoRectifier& rectifie
   }
 }
 
-void StereoTrackerNodelet::OnSingleImage(std::atomic<std::uint64_t>* count) {
-  const std::uint64_t unpaired = ++*count - pairs_.load();
+void StereoTrackerNodelet::OnSingleImage(int side) {
+  const char* names[2] = {"left", "right"};
+  const double now = ros::WallTime::now().toSec();
+  if (last_arrival_[1 - side].load() == 0.0) last_arrival_[1 - side] = now;  // first image
+  last_arrival_[side] = now;
+  // A second without the other side while this one streams (20 frames at 20 Hz): not a stamp
+  // mismatch but a camera that stopped.
+  const double silent = now - last_arrival_[1 - side].load();
+  if (silent > 1.0) {
+    dropout_reported_ = true;
+    NODELET_WARN_THROTTLE(2,
+                          "no %s images for %.1f s while %s images arrive: a camera dropped "
+                          "out; no stereo pairs, tracking waits for it",
+                          names[1 - side], silent, names[side]);
+    return;
+  }
+  std::atomic<std::uint64_t>& count = side == 0 ? left_images_ : right_images_;
+  const std::uint64_t unpaired = ++count - pairs_.load();
   if (unpaired > static_cast<std::uint64_t>(queue_size_)) {
     NODELET_WARN_THROTTLE(5,
                           "left/right images do not synchronise (%lu left, %lu right, %lu pairs); "
@@ -400,6 +425,7 @@ void StereoTrackerNodelet::OnSingleImage(std::atomic<std::uint64_t>* count) {
 void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_message,
                                     const sensor_msgs::ImageConstPtr& right_message) {
   ++pairs_;
+  if (dropout_reported_.exchange(false)) NODELET_INFO("stereo pairs arrive again");
   std::uint64_t skipped_since_report = 0;
   double frame_ms = 0;
   {
@@ -480,10 +506,43 @@ void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_me
     return;
   }
   const ros::Time stamp = left_message->header.stamp;
+  // A camera that freezes sends its last image again under new stamps: tracking it would
+  // claim the robot stands still. Skipped, and said so, until the image changes.
+  const auto same_image = [](const cv_bridge::CvImageConstPtr& a,
+                             const cv_bridge::CvImageConstPtr& b) {
+    return a && b && a->image.size() == b->image.size() && a->image.isContinuous() &&
+           b->image.isContinuous() &&
+           std::memcmp(a->image.data, b->image.data, a->image.total() * a->image.elemSize()) == 0;
+  };
+  const bool left_frozen = same_image(left, previous_left_);
+  const bool right_frozen = same_image(right, previous_right_);
+  if (stamp > last_stamp_ && (left_frozen || right_frozen)) {
+    ++frozen_frames_;
+    NODELET_WARN_THROTTLE(2,
+                          "the %s frozen: the same image %d time(s) in a row under new stamps; "
+                          "frames skipped until it changes",
+                          left_frozen && right_frozen ? "left and right cameras are"
+                          : left_frozen               ? "left camera is"
+                                                      : "right camera is",
+                          frozen_frames_);
+    return;
+  }
+  if (frozen_frames_ > 0) {
+    NODELET_INFO("the camera images change again after %d frozen frame(s)", frozen_frames_);
+    frozen_frames_ = 0;
+  }
+  previous_left_ = left;
+  previous_right_ = right;
   if (!last_stamp_.isZero() && stamp <= last_stamp_) {
     NODELET_WARN("time went backwards (%.3f after %.3f; a looped bag?): tracking reset",
                  stamp.toSec(), last_stamp_.toSec());
     front_end_->Reset();
+  } else if (!last_stamp_.isZero() &&
+             (stamp - last_stamp_).toSec() > options_.tracker.max_prediction_gap) {
+    NODELET_WARN(
+        "no stereo pairs for %.1f s (a gap in the images): the motion model assumes no "
+        "motion across it; a lost track relocalizes",
+        (stamp - last_stamp_).toSec());
   }
   last_stamp_ = stamp;
   try {

@@ -52,6 +52,7 @@ void TrackerOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_inliers_weak", &min_inliers_weak);
   visitor.Visit("min_map_points", &min_map_points);
   visitor.Visit("local_keyframes", &local_keyframes);
+  visitor.Visit("max_prediction_gap", &max_prediction_gap);
   visitor.Visit("parallel", &parallel);
   visitor.Visit("refinement_sigma", &refinement.sigma);
   visitor.Visit("refinement_rounds", &refinement.rounds);
@@ -71,6 +72,8 @@ void TrackerOptions::Validate() const {
   if (min_inliers_weak < 6 || min_inliers_ok < min_inliers_weak) {
     throw std::invalid_argument("tracker: need 6 <= min_inliers_weak <= min_inliers_ok");
   }
+  if (!(max_prediction_gap > 0))
+    throw std::invalid_argument("tracker.max_prediction_gap must be > 0");
   if (min_map_points < 3 || local_keyframes < 1) {
     throw std::invalid_argument("tracker: min_map_points >= 3 and local_keyframes >= 1");
   }

@@ -233,6 +233,7 @@ Eigen::Isometry3d Tracker::Predict(double timestamp) const {
   // gaps. Gaps within a third of each other count as the same: camera clocks jitter, and a
   // scaled prediction would only add that jitter to the motion.
   const double dt = timestamp - last_timestamp_;
+  if (dt > options_.max_prediction_gap) return last_T_world_camera_;
   const double ratio = velocity_dt_ > 0 && dt > 0 ? dt / velocity_dt_ : 1.0;
   if (ratio < 1.5 && ratio > 1 / 1.5) return last_T_world_camera_ * velocity_;
   const Eigen::AngleAxisd rotation(velocity_.linear());

@@ -142,12 +142,13 @@ TEST_F(BadInputTest, WarnsSkipsAndKeepsTracking) {
   EXPECT_FALSE(HasOdometry(t));
   t += step;
 
-  // Left images whose right partners never come (more than the sync queue holds): nothing to
-  // track, and a warning.
+  // The right camera drops out (12 left images, 1.8 s without a right one): nothing to track,
+  // and a warning that says so.
   for (int i = 0; i < 12; ++i, t += step) {
     Send(frame5.left, frame5.right, sensor_msgs::image_encodings::MONO8, t, /*send_right=*/false);
     EXPECT_FALSE(HasOdometry(t));
   }
+  EXPECT_TRUE(Logged("no right images for")) << "a dropout is named as such";
 
   // Blank images: no features, tracking lost, no odometry.
   const cv::Mat black(480, 752, CV_8UC1, cv::Scalar(0));
@@ -158,6 +159,33 @@ TEST_F(BadInputTest, WarnsSkipsAndKeepsTracking) {
   // Real frames again: a new map, tracked.
   for (std::size_t i = 6; i < 10; ++i, t += step) SendReal(i, t);
   EXPECT_TRUE(HasOdometry(t - step)) << "tracking must resume after bad input";
+  EXPECT_TRUE(Logged("stereo pairs arrive again"));
+
+  // A frozen camera: frame 10 four times under new stamps. The first is tracked, the repeats
+  // skipped with a warning, and the next real frame is tracked again.
+  const datasets::StereoImages frame10 = sequence_.LoadStereoPair(10);
+  std::int64_t first_frozen = t;
+  for (int i = 0; i < 4; ++i, t += step) {
+    Send(frame10.left, frame10.right, sensor_msgs::image_encodings::MONO8, t);
+  }
+  EXPECT_TRUE(HasOdometry(first_frozen));
+  EXPECT_FALSE(HasOdometry(t - step)) << "a repeated image is not a frame";
+  EXPECT_TRUE(Logged("the left and right cameras are frozen: the same image"));
+  SendReal(11, t);
+  EXPECT_TRUE(HasOdometry(t)) << "tracking goes on when the images change";
+  EXPECT_TRUE(Logged("change again after 3 frozen frame(s)"));
+  t += step;
+
+  // A gap of 3 s in the images (the camera stood still meanwhile): warned, and tracked across
+  // it, the motion model predicting no motion.
+  t += 3'000'000'000;
+  SendReal(12, t);
+  EXPECT_TRUE(Logged("no stereo pairs for 3.0 s")) << "the gap is named";
+  EXPECT_TRUE(HasOdometry(t)) << "tracking resumes after a gap";
+  t += step;
+  SendReal(13, t);
+  EXPECT_TRUE(HasOdometry(t));
+  t += step;
 
   // Time going backwards (a looped bag): reset, and tracking goes on from there.
   const std::int64_t looped = t0 - 10 * step;

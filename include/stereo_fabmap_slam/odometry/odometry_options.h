@@ -42,7 +42,13 @@ struct TrackerOptions {
   int min_inliers_weak = 15;  // fewer inliers: tracking lost
   int min_map_points = 30;    // stereo points needed to start a map
   int local_keyframes = 16;   // recent keyframes whose points the tracker searches
-  bool parallel = true;       // search map points on two threads
+  // [s] Beyond this gap since the last frame (a camera that dropped out, a paused bag) the
+  // motion model predicts no motion: a velocity measured over 50 ms extrapolated over seconds
+  // is a worse guess than standing still (dropouts mostly happen while the robot waits), and if
+  // the camera did move, tracking fails and relocalization finds it. Half a second is 10 frames
+  // at 20 Hz, beyond the skipped frames of a busy tracker (issue 14: 10x real time).
+  double max_prediction_gap = 0.5;
+  bool parallel = true;  // search map points on two threads
   PoseRefinementOptions refinement;
 
   void Visit(io::OptionVisitor& visitor);
