@@ -237,6 +237,14 @@ void BackendNodelet::Work() {
         if (!adjuster) {
           adjuster = std::make_unique<backend::LocalBundleAdjuster>(
               options_, ros_conversions::CameraOfKeyframe(*message));
+          // A Backend (re)started while the tracker runs: say what this map does not have.
+          if (message->id > 0 && loaded_below == 0) {
+            NODELET_WARN(
+                "first keyframe received is %lu: the keyframes before it are not in "
+                "this Backend's map (restarted while the tracker ran?); optimising "
+                "from here, map -> odom starts at identity",
+                static_cast<unsigned long>(message->id));
+          }
         }
         if (static_cast<std::int64_t>(message->id) < loaded_below) continue;  // before a load
         const map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
