@@ -3,6 +3,7 @@
 #   make test   install what is missing, build, run every test (gtest + rostest)
 #   make build  build only; every tool is then build/bin/<tool>
 #   make bench  benchmark figures for docs/benchmarks.md
+#   make bench-long  10 minutes of the rendered hall: memory per keyframe, time against map size
 #   make screenshots  rviz pictures for docs/ and the README (installs rviz, xvfb, imagemagick)
 # Use the ROS side (roslaunch, rosrun, nodelets) after `source build/ws/devel/setup.bash`.
 SHELL := /bin/bash
@@ -39,7 +40,7 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_DEVEL_PREFIX=$(WS)/devel -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
 CMAKE_BUILD := cmake --build $(WS)/build --
 
-.PHONY: deps build test demo bench clean format vocabulary screenshots
+.PHONY: deps build test demo bench bench-long clean format vocabulary screenshots
 
 deps:
 	@missing=$$(for p in $(DEBIAN_PACKAGES); do \
@@ -89,6 +90,9 @@ demo: build
 # Speed and accuracy figures (docs/benchmarks.md records them); never part of `make test`.
 bench: build
 	bash scripts/bench.sh
+
+bench-long: build
+	bash scripts/bench_long.sh
 
 # rviz with the shipped config under Xvfb, on the EuRoC subset and on the rendered loop.
 SCREENSHOT_PACKAGES := rviz xvfb imagemagick

@@ -1,6 +1,7 @@
 // Runs the odometry offline on an EuRoC ASL sequence, in one thread and deterministically, and
 // writes trajectory.txt, keyframes.txt, timing.csv and summary.json.
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -66,6 +67,16 @@ double CpuSeconds() {
   getrusage(RUSAGE_SELF, &usage);
   return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
          1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+// The memory in use now (not the peak): for memory growth over a long run.
+double ResidentMegabytes() {
+  std::size_t pages = 0, resident = 0;
+  std::FILE* statm = std::fopen("/proc/self/statm", "r");
+  if (statm == nullptr) return 0;
+  if (std::fscanf(statm, "%zu %zu", &pages, &resident) != 2) resident = 0;
+  std::fclose(statm);
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
 }
 
 double PeakResidentMegabytes() {
@@ -227,8 +238,9 @@ int main(int argc, char** argv) {
           slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
       processing_ms += NowMs() - start;
       if (!quiet && (frame.state == odometry::TrackingState::kLost || (i + 1) % 100 == 0)) {
-        std::printf("frame %zu/%zu: %s, %zu keyframes\n", i + 1, sequence.size(),
-                    odometry::TrackingStateName(frame.state), slam.keyframe_count());
+        std::printf("frame %zu/%zu: %s, %zu keyframes, resident %.1f MB\n", i + 1, sequence.size(),
+                    odometry::TrackingStateName(frame.state), slam.keyframe_count(),
+                    ResidentMegabytes());
       }
     }
     const double wall_s = (NowMs() - wall_start) / 1000.0;
