@@ -16,19 +16,17 @@ mkdir -p "$OUT"
 bag=$OUT/$(basename "$SEQUENCE").bag
 [ -f "$bag" ] || build/bin/euroc_to_bag "$SEQUENCE" "$bag" > /dev/null
 
-set +u; source build/ws/devel/setup.bash; set -u
-port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI=http://127.0.0.1:$port ROS_HOME=$PWD/$OUT/ros
-roscore -p "$port" > "$OUT/roscore.log" 2>&1 &
-roscore_pid=$!
 launch_pid=
+private_master_pid=
 cleanup() {
   [ -n "$launch_pid" ] && kill -INT "$launch_pid" 2> /dev/null || true
-  kill "$roscore_pid" 2> /dev/null || true
+  [ -n "$private_master_pid" ] && kill "$private_master_pid" 2> /dev/null || true
   wait 2> /dev/null || true
 }
 trap cleanup EXIT
-until rosparam list > /dev/null 2>&1; do sleep 0.2; done
+source scripts/private_master.sh
+mkdir -p "$OUT/ros"
+start_private_master "$PWD/$OUT/ros"
 ticks=$(getconf CLK_TCK)
 duration=$(rosbag info -y -k duration "$bag")
 frames=$(grep -vc '^#' "$SEQUENCE/mav0/cam0/data.csv")

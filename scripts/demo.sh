@@ -42,19 +42,17 @@ calibration=$PWD/config/euroc_stereo.yaml
 [ -f "$SEQUENCE/stereo_calibration.yaml" ] && calibration=$PWD/$SEQUENCE/stereo_calibration.yaml
 
 # A private master on a free port, so that the demo neither needs nor disturbs a running ROS.
-set +u; source build/ws/devel/setup.bash; set -u  # setup files read unset variables
-port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI=http://127.0.0.1:$port ROS_HOME=$PWD/$OUT/ros
-roscore -p "$port" > "$OUT/roscore.log" 2>&1 &
-roscore_pid=$!
 cleanup() {
   kill "$recorder_pid" 2> /dev/null || true; kill -INT "$launch_pid" 2> /dev/null || true
-  kill "$roscore_pid" 2> /dev/null || true; wait 2> /dev/null || true
+  kill "$private_master_pid" 2> /dev/null || true; wait 2> /dev/null || true
 }
 recorder_pid=
 launch_pid=
+private_master_pid=
 trap cleanup EXIT
-until rosparam list > /dev/null 2>&1; do sleep 0.2; done
+source scripts/private_master.sh
+mkdir -p "$OUT/ros"
+start_private_master "$PWD/$OUT/ros"
 
 echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector + Visualizer, rosbag play $bag"
 rosbag record -q -O "$OUT/recorded.bag" /odometry /keyframes /keyframe_updates /loop_edges /map_graph \

@@ -31,20 +31,16 @@ shift 2
 [ -f "$bag" ] || { echo "$0: no bag at $bag" >&2; exit 1; }
 log_dir=$(mktemp -d)
 
-# A private master on a free port, as the demo does.
-set +u; source build/ws/devel/setup.bash; set -u
-port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI=http://127.0.0.1:$port ROS_HOME=$log_dir
-roscore -p "$port" > "$log_dir/roscore.log" 2>&1 &
-roscore_pid=$!
 launch_pid=
+private_master_pid=
 cleanup() {
   [ -n "$launch_pid" ] && kill -INT "$launch_pid" 2> /dev/null || true
-  kill "$roscore_pid" 2> /dev/null || true
+  [ -n "$private_master_pid" ] && kill "$private_master_pid" 2> /dev/null || true
   wait 2> /dev/null || true
 }
 trap cleanup EXIT
-until rosparam list > /dev/null 2>&1; do sleep 0.2; done
+source scripts/private_master.sh
+start_private_master "$log_dir"
 
 config=$PWD/config/stereo_fabmap_slam.rviz
 if [ -n "${RVIZ_VIEW:-}" ]; then

@@ -16,6 +16,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "euroc_bag_fixture.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
@@ -26,20 +27,41 @@
 namespace stereo_fabmap_slam::test {
 namespace {
 
-TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
-  const std::string asl = EurocSequencePath("MH01_first10s");
-  TemporaryDirectory temp;
-  const std::string bag = temp.path() + "/mh01.bag";
-  std::string output;
-  ASSERT_EQ(RunCommand(std::string(EUROC_TO_BAG_BIN) + " " + asl + " " + bag + " 2>&1", &output), 0)
-      << output;
-  ASSERT_EQ(RunCommand(std::string(RUN_DATASET_BIN) + " " + asl + " --quiet --output " +
-                           temp.path() + "/offline 2>&1",
-                       &output),
-            0)
-      << output;
-  const evaluation::Trajectory offline =
-      evaluation::ReadTumTrajectory(temp.path() + "/offline/odometry.txt");  // odom frame
+// MH01_first10s as a bag, and the offline runner's odometry of it to compare with.
+class EurocOdometry : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    asl_ = EurocSequencePath("MH01_first10s");
+    bag_ = temp_.path() + "/mh01.bag";
+    WriteEurocSubsetBag("MH01_first10s", bag_);
+    std::string output;
+    ASSERT_EQ(RunCommand(std::string(RUN_DATASET_BIN) + " " + asl_ + " --quiet --output " +
+                             temp_.path() + "/offline 2>&1",
+                         &output),
+              0)
+        << output;
+    offline_ = evaluation::ReadTumTrajectory(temp_.path() + "/offline/odometry.txt");
+  }
+
+  // The offline runner's camera pose (in its first camera pose) at an image stamp.
+  Eigen::Isometry3d OfflinePose(std::int64_t stamp_ns) const {
+    for (const evaluation::StampedPose& p : offline_) {
+      if (std::llabs(static_cast<std::int64_t>(std::llround(p.timestamp * 1e9)) - stamp_ns) < 1000)
+        return p.pose;
+    }
+    ADD_FAILURE() << "offline trajectory has no pose at " << stamp_ns;
+    return Eigen::Isometry3d::Identity();
+  }
+
+  TemporaryDirectory temp_;
+  std::string asl_, bag_;
+  evaluation::Trajectory offline_;
+};
+
+TEST_F(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
+  const std::string& asl = asl_;
+  const std::string& bag = bag_;
+  TemporaryDirectory& temp = temp_;
 
   std::mutex mutex;
   std::map<std::int64_t, Eigen::Isometry3d> online;  // by stamp [ns]
@@ -105,19 +127,11 @@ TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
 
   // Both runs start their world at their first tracked frame; compare the motion from the
   // online run's first to its last frame.
-  const auto offline_pose = [&](std::int64_t stamp_ns) {
-    for (const evaluation::StampedPose& p : offline) {
-      if (std::llabs(static_cast<std::int64_t>(std::llround(p.timestamp * 1e9)) - stamp_ns) < 1000)
-        return p.pose;
-    }
-    ADD_FAILURE() << "offline trajectory has no pose at " << stamp_ns;
-    return Eigen::Isometry3d::Identity();
-  };
   // online: the body in odom; offline: the camera in its own first pose.
   const auto first = online.begin(), last = std::prev(online.end());
   const Eigen::Isometry3d online_motion = first->second.inverse() * last->second;
-  const Eigen::Isometry3d offline_motion = T_base_camera * offline_pose(first->first).inverse() *
-                                           offline_pose(last->first) * T_base_camera.inverse();
+  const Eigen::Isometry3d offline_motion = T_base_camera * OfflinePose(first->first).inverse() *
+                                           OfflinePose(last->first) * T_base_camera.inverse();
   const double difference = (online_motion.translation() - offline_motion.translation()).norm();
   RecordProperty("final_pose_difference_m", std::to_string(difference));
   EXPECT_LT(difference, 0.05);
@@ -154,20 +168,9 @@ TEST(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
 // The same bag with the calibration from its camera_info (written by euroc_to_bag, found
 // beside the remapped image topics): tracked as well, with the camera as the base (camera_info
 // carries no mounting), so the camera's motion matches the offline runner's.
-TEST(EurocOdometry, CalibrationFromTheBagsCameraInfo) {
-  const std::string asl = EurocSequencePath("MH01_first10s");
-  TemporaryDirectory temp;
-  const std::string bag = temp.path() + "/mh01.bag";
-  std::string output;
-  ASSERT_EQ(RunCommand(std::string(EUROC_TO_BAG_BIN) + " " + asl + " " + bag + " 2>&1", &output), 0)
-      << output;
-  ASSERT_EQ(RunCommand(std::string(RUN_DATASET_BIN) + " " + asl + " --quiet --output " +
-                           temp.path() + "/offline 2>&1",
-                       &output),
-            0)
-      << output;
-  const evaluation::Trajectory offline =
-      evaluation::ReadTumTrajectory(temp.path() + "/offline/odometry.txt");
+TEST_F(EurocOdometry, CalibrationFromTheBagsCameraInfo) {
+  const std::string& bag = bag_;
+  TemporaryDirectory& temp = temp_;
   std::mutex mutex;
   std::map<std::int64_t, Eigen::Isometry3d> online;
   ros::NodeHandle node;
@@ -192,21 +195,13 @@ TEST(EurocOdometry, CalibrationFromTheBagsCameraInfo) {
   // The first camera_info pair arrives with the first images: a frame may come before it.
   EXPECT_GE(online.size(), 198u) << ReadTextFile(temp.path() + "/roslaunch.log");
   ASSERT_GE(online.size(), 2u);
-  const auto offline_pose = [&](std::int64_t stamp_ns) {
-    for (const evaluation::StampedPose& p : offline) {
-      if (std::llabs(static_cast<std::int64_t>(std::llround(p.timestamp * 1e9)) - stamp_ns) < 1000)
-        return p.pose;
-    }
-    ADD_FAILURE() << "offline trajectory has no pose at " << stamp_ns;
-    return Eigen::Isometry3d::Identity();
-  };
   // The base is the raw left camera, the offline runner's the rectified one: the same origin,
   // so the distances travelled agree (the offline run starts a frame or two earlier).
   // The same for the rotation angle of the motion (unchanged by a change of frame).
   const auto first = online.begin(), last = std::prev(online.end());
   const Eigen::Isometry3d online_motion = first->second.inverse() * last->second;
   const Eigen::Isometry3d offline_motion =
-      offline_pose(first->first).inverse() * offline_pose(last->first);
+      OfflinePose(first->first).inverse() * OfflinePose(last->first);
   const double online_distance = online_motion.translation().norm();
   const double offline_distance = offline_motion.translation().norm();
   RecordProperty("distance_difference_m", std::to_string(online_distance - offline_distance));

@@ -16,6 +16,7 @@
 #include <rosgraph_msgs/Log.h>
 #include <stereo_fabmap_slam/KeyframeUpdate.h>
 
+#include "euroc_bag_fixture.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -24,12 +25,7 @@ namespace {
 TEST(Restart, BackendUnloadedAndLoadedAgainWhileTheBagPlays) {
   TemporaryDirectory temp;
   const std::string bag = temp.path() + "/mh01.bag";
-  std::string output;
-  ASSERT_EQ(RunCommand(std::string(EUROC_TO_BAG_BIN) + " " + EurocSequencePath("MH01_first10s") +
-                           " " + bag + " 2>&1",
-                       &output),
-            0)
-      << output;
+  WriteEurocSubsetBag("MH01_first10s", bag);
 
   std::mutex mutex;
   std::set<double> odometry_stamps;

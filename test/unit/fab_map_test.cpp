@@ -442,6 +442,20 @@ std::string ErrorOf(Action action) {
   return "";
 }
 
+cv::Mat RandomBinaryDescriptors(int rows) {
+  cv::Mat descriptors(rows, 32, CV_8U);
+  cv::randu(descriptors, 0, 256);
+  return descriptors;
+}
+
+// A vocabulary of at most 4^3 = 64 words: small enough to train in milliseconds.
+Vocabulary SmallVocabulary(const cv::Mat& descriptors) {
+  VocabularyOptions options;
+  options.branching = 4;
+  options.depth = 3;
+  return Vocabulary::Train(descriptors, options);
+}
+
 void FlipByte(const std::string& path, std::size_t offset) {
   std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
   file.seekg(static_cast<std::streamoff>(offset));
@@ -452,12 +466,8 @@ void FlipByte(const std::string& path, std::size_t offset) {
 
 TEST(FabMapFiles, RoundTripsExactlyAndRefusesDamage) {
   TemporaryDirectory temp;
-  cv::Mat descriptors(400, 32, CV_8U);
-  cv::randu(descriptors, 0, 256);
-  VocabularyOptions options;
-  options.branching = 4;
-  options.depth = 3;
-  const Vocabulary vocabulary = Vocabulary::Train(descriptors, options);
+  const cv::Mat descriptors = RandomBinaryDescriptors(400);
+  const Vocabulary vocabulary = SmallVocabulary(descriptors);
   EXPECT_GT(vocabulary.size(), 30);
   EXPECT_LE(vocabulary.size(), 64);
   const ChowLiuTree tree = ToyTree();
@@ -500,12 +510,7 @@ TEST(FabMapFiles, RoundTripsExactlyAndRefusesDamage) {
 // InputError or loaded, none crashing, hanging or allocating more than 256 MB.
 TEST(FabMapFiles, FuzzedFilesAreRefusedOrLoadedNeverCrash) {
   TemporaryDirectory temp;
-  cv::Mat descriptors(400, 32, CV_8U);
-  cv::randu(descriptors, 0, 256);
-  VocabularyOptions options;
-  options.branching = 4;
-  options.depth = 3;
-  Vocabulary::Train(descriptors, options).Save(temp.path() + "/v.bin");
+  SmallVocabulary(RandomBinaryDescriptors(400)).Save(temp.path() + "/v.bin");
   ToyTree().Save(temp.path() + "/t.bin");
   PlaceDatabase places(6);
   places.AddPlace({0, 3});
