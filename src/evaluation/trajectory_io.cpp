@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -66,9 +67,10 @@ void NoteStamp(const Trajectory& trajectory, TrajectoryFileNotes* notes) {
 // the nanosecond; a double holds 1e18 to within 256 ns).
 double ParseNanosecondStamp(const std::string& field, const std::string& path, std::size_t line) {
   char* end = nullptr;
-  std::strtoll(field.c_str(), &end, 10);
-  if (!field.empty() && end == field.c_str() + field.size()) {
-    return static_cast<double>(ParseInt64(field, path, line)) * 1e-9;
+  errno = 0;
+  const long long whole = std::strtoll(field.c_str(), &end, 10);
+  if (!field.empty() && end == field.c_str() + field.size() && errno != ERANGE) {
+    return static_cast<double>(whole) * 1e-9;
   }
   const double value = ParseDouble(field, path, line);
   if (!std::isfinite(value)) throw FileError(path, line, "'" + field + "' is not a finite number");
@@ -92,17 +94,22 @@ void FinishWriting(File file, const std::string& path) {
   }
 }
 
+// The data rows of a trajectory file: a header row first is dropped (and noted).
+std::vector<TextRow> PoseRows(const std::string& path, Separator separator,
+                              TrajectoryFileNotes* notes) {
+  std::vector<TextRow> rows = ReadDelimitedText(path, separator);
+  if (!rows.empty() && IsHeader(rows.front())) {
+    rows.erase(rows.begin());
+    if (notes != nullptr) notes->header_skipped = true;
+  }
+  return rows;
+}
+
 }  // namespace
 
 Trajectory ReadTumTrajectory(const std::string& path, TrajectoryFileNotes* notes) {
   Trajectory trajectory;
-  const std::vector<TextRow> rows = ReadDelimitedText(path, Separator::kWhitespace);
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    const TextRow& row = rows[r];
-    if (r == 0 && IsHeader(row)) {
-      if (notes != nullptr) notes->header_skipped = true;
-      continue;
-    }
+  for (const TextRow& row : PoseRows(path, Separator::kWhitespace, notes)) {
     RequireFieldCount(row, path, 8, "8 fields 't x y z qx qy qz qw'");
     const std::vector<double> v = ParseNumbers(row, path, 0, 8);
     const Eigen::Quaterniond q = CheckedQuaternion(v[7], v[4], v[5], v[6], path, row.line_number);
@@ -114,13 +121,7 @@ Trajectory ReadTumTrajectory(const std::string& path, TrajectoryFileNotes* notes
 
 Trajectory ReadEurocTrajectory(const std::string& path, TrajectoryFileNotes* notes) {
   Trajectory trajectory;
-  const std::vector<TextRow> rows = ReadDelimitedText(path, Separator::kComma);
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    const TextRow& row = rows[r];
-    if (r == 0 && IsHeader(row)) {
-      if (notes != nullptr) notes->header_skipped = true;
-      continue;
-    }
+  for (const TextRow& row : PoseRows(path, Separator::kComma, notes)) {
     RequireFieldCount(row, path, 8, "8 fields 'timestamp [ns], x, y, z, qw, qx, qy, qz[, ...]'");
     const double stamp = ParseNanosecondStamp(row.fields[0], path, row.line_number);
     const std::vector<double> v = ParseNumbers(row, path, 1, 7);

@@ -41,6 +41,9 @@ class BaseFrameConvention {
     return T_base_camera_ * T_world_camera * T_base_camera_.inverse();
   }
 
+  // The base pose's covariance in the base's own axes (right perturbation), from the camera
+  // pose's (right perturbation, camera axes): what a twist's covariance is built from.
+  geometry::PoseCovariance BaseCovariance(const geometry::PoseCovariance& camera_covariance) const;
   // The covariance of BaseInOdom(T_world_camera), with axes in odom as nav_msgs/Odometry's pose
   // covariance is given, from the camera pose's (right perturbation, camera axes).
   geometry::PoseCovariance BaseCovarianceInOdom(

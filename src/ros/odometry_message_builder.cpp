@@ -25,10 +25,11 @@ nav_msgs::Odometry OdometryMessageBuilder::Build(const ros::Time& stamp,
   odometry.child_frame_id = base_frame_;
   const Eigen::Isometry3d T_odom_base = frames_.BaseInOdom(T_world_camera);
   odometry.pose.pose = ToPoseMessage(T_odom_base);
-  CopyCovariance(frames_.BaseCovarianceInOdom(T_world_camera, camera_covariance),
+  // Carried to the base once: the pose's covariance turns it into odom's axes, the twist's
+  // keeps it in the base's.
+  const geometry::PoseCovariance covariance_in_base = frames_.BaseCovariance(camera_covariance);
+  CopyCovariance(geometry::RotateCovariance(covariance_in_base, T_odom_base.rotation()),
                  &odometry.pose.covariance);
-  const geometry::PoseCovariance covariance_in_base =
-      geometry::MoveCovarianceToFrame(camera_covariance, frames_.T_base_camera().inverse());
 
   const double dt = previous_ ? (stamp - previous_->stamp).toSec() : 0.0;
   if (continues_previous && previous_ && dt > 0) {
