@@ -16,6 +16,7 @@
 #include "command_line.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/evaluation/pose_interpolation.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 
@@ -44,14 +45,8 @@ double Percentile(std::vector<double> values, double p) {
   return values[static_cast<std::size_t>(p * (values.size() - 1) + 0.5)];
 }
 
-// The ground-truth pose nearest in time, if one lies within 10 ms.
-std::optional<Eigen::Isometry3d> PoseAt(const evaluation::Trajectory& truth, double time) {
-  const auto it = std::min_element(truth.begin(), truth.end(), [&](const auto& a, const auto& b) {
-    return std::abs(a.timestamp - time) < std::abs(b.timestamp - time);
-  });
-  if (it == truth.end() || std::abs(it->timestamp - time) > 0.01) return std::nullopt;
-  return it->pose;
-}
+// [s] Ground truth is interpolated between two poses at most this far apart (EuRoC: 5 ms).
+constexpr double kGroundTruthMaxGap = 0.02;
 
 }  // namespace
 
@@ -112,9 +107,10 @@ int main(int argc, char** argv) {
       ms.push_back(found.ms);
       extraction_ms.push_back(found.extraction_ms);
       if (!found.result.success()) continue;
-      const std::optional<Eigen::Isometry3d> keyframe_truth =
-          PoseAt(truth, slam.KeyframeTime(found.result.keyframe_id));
-      const std::optional<Eigen::Isometry3d> frame_truth = PoseAt(truth, time);
+      const std::optional<Eigen::Isometry3d> keyframe_truth = evaluation::InterpolatePose(
+          truth, slam.KeyframeTime(found.result.keyframe_id), kGroundTruthMaxGap);
+      const std::optional<Eigen::Isometry3d> frame_truth =
+          evaluation::InterpolatePose(truth, time, kGroundTruthMaxGap);
       if (!keyframe_truth || !frame_truth) {
         ++without_truth;
         continue;
