@@ -5,6 +5,7 @@
 #   make bench  benchmark figures for docs/benchmarks.md
 #   make bench-long  10 minutes of the rendered hall: memory per keyframe, time against map size
 #   make screenshots  rviz pictures for docs/ and the README (installs rviz, xvfb, imagemagick)
+#   make evaluate  the thesis' studies: output/evaluation/report.md (installs matplotlib)
 # Use the ROS side (roslaunch, rosrun, nodelets) after `source build/ws/devel/setup.bash`.
 SHELL := /bin/bash
 .DEFAULT_GOAL := build
@@ -40,10 +41,11 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_DEVEL_PREFIX=$(WS)/devel -DSTEREO_FABMAP_SLAM_TOOL_LINK_DIR=$(BIN)
 CMAKE_BUILD := cmake --build $(WS)/build --
 
-.PHONY: deps build test demo bench bench-long clean format vocabulary screenshots
+.PHONY: deps build test demo bench bench-long clean format vocabulary screenshots evaluate sanitize-build
 
-deps:
-	@missing=$$(for p in $(DEBIAN_PACKAGES); do \
+# $(call install_missing,PACKAGES): installs those of the Debian packages not installed yet.
+define install_missing
+	@missing=$$(for p in $(1); do \
 	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; \
 	  done | tr '\n' ' '); \
 	if [ -n "$${missing// }" ]; then \
@@ -51,6 +53,10 @@ deps:
 	  $(SUDO) apt-get update -q && \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
 	fi
+endef
+
+deps:
+	$(call install_missing,$(DEBIAN_PACKAGES))
 
 $(WS)/build/Makefile:
 	cmake -S $(REPO) -B $(WS)/build $(CMAKE_ARGS)
@@ -98,13 +104,7 @@ bench-long: build
 SCREENSHOT_PACKAGES := rviz xvfb imagemagick
 SCREENSHOTS := output/screenshots
 screenshots: build
-	@missing=$$(for p in $(SCREENSHOT_PACKAGES); do \
-	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; \
-	  done | tr '\n' ' '); \
-	if [ -n "$${missing// }" ]; then \
-	  $(SUDO) apt-get update -q && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
-	fi
+	$(call install_missing,$(SCREENSHOT_PACKAGES))
 	mkdir -p $(SCREENSHOTS)
 	$(BIN)/euroc_to_bag $(STEREO_FABMAP_SLAM_DATA)/euroc/MH01_first10s $(SCREENSHOTS)/MH01_first10s.bag
 	rm -rf $(SCREENSHOTS)/loop
@@ -113,6 +113,13 @@ screenshots: build
 	  $(SCREENSHOTS)/MH01_first10s.bag docs/rviz_euroc_mh01.png && break; done
 	for attempt in 1 2 3; do bash scripts/rviz_screenshot.sh $(SCREENSHOTS)/loop/sequence.bag \
 	  docs/rviz_synthetic_loop.png $(SCREENSHOTS)/loop/stereo_calibration.yaml && break; done
+
+# The thesis' studies (descriptors, PnP kernels, keyframe presets, relocalization recall) on
+# ../shared/data, opencv-doc's graf pair and rendered routes: output/evaluation/report.md with
+# its plots (matplotlib draws them; installed here, not needed by the package itself).
+evaluate: build
+	$(call install_missing,python3-matplotlib)
+	bash scripts/evaluate.sh
 
 clean:
 	rm -rf build

@@ -20,8 +20,8 @@
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/evaluation/association.h"
 #include "stereo_fabmap_slam/evaluation/pnp_study.h"
+#include "stereo_fabmap_slam/evaluation/pose_interpolation.h"
 #include "stereo_fabmap_slam/evaluation/trajectory.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 
@@ -107,14 +107,10 @@ std::vector<evaluation::PnpTrial> StudySequence(const std::string& directory,
   // Ground truth is the body's pose; the study needs the rectified left camera's (T_WB T_BS).
   const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
       sequence.ground_truth(), rectifier.T_body_rectified_left());
-  evaluation::Trajectory frame_times;
-  for (const datasets::StereoFrameEntry& frame : sequence.frames()) {
-    frame_times.push_back({frame.timestamp_ns * 1e-9, Eigen::Isometry3d::Identity()});
-  }
+  // Each frame's ground truth interpolated between poses at most 20 ms apart (EuRoC: 5 ms).
   std::vector<std::optional<Eigen::Isometry3d>> poses(sequence.size());
-  for (const evaluation::AssociatedPair& pair :
-       evaluation::AssociateByTimestamp(truth, frame_times, 0.01)) {
-    poses[pair.estimate] = truth[pair.reference].pose;
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    poses[i] = evaluation::InterpolatePose(truth, sequence.frames()[i].timestamp_ns * 1e-9, 0.02);
   }
   const std::vector<Pair> pairs = ChoosePairs(poses, settings);
   if (pairs.empty()) {
