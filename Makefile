@@ -83,12 +83,24 @@ vocabulary: deps $(WS)/build/Makefile
 	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/vocabulary.bin
 
 # Builds the test programs in parallel, then runs them one at a time (each rostest starts its
-# own master) and closes with one line "tests: N passed, N failed, N skipped".
-test: build
+# own master); then the sanitizer build's unit tests (ASan, LSan, UBSan), two at a time; and
+# closes with one line "tests: N passed, N failed, N skipped" over both.
+test: build sanitize-build
 	$(CMAKE_BUILD) -j$(JOBS) tests
 	rm -rf $(WS)/build/test_results
-	$(CMAKE_BUILD) -j1 run_tests
+	-$(CMAKE_BUILD) -j1 run_tests
+	-bash scripts/sanitizer_tests.sh $(SANITIZE)/devel/lib/stereo_fabmap_slam \
+	  $(WS)/build/test_results/sanitizers
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
+
+# The sanitizer build: a second build folder, Debug flags with ASan and UBSan, the ROS-free part
+# only (STEREO_FABMAP_SLAM_SANITIZE in CMakeLists.txt). Its tools stay out of build/bin.
+SANITIZE := $(REPO)/build/sanitize
+sanitize-build: deps
+	@test -f $(SANITIZE)/build/Makefile || cmake -S $(REPO) -B $(SANITIZE)/build -DCMAKE_BUILD_TYPE=Debug \
+	  -DSTEREO_FABMAP_SLAM_SANITIZE=ON -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+	  -DCATKIN_DEVEL_PREFIX=$(SANITIZE)/devel
+	cmake --build $(SANITIZE)/build -- -j$(JOBS) tests
 
 demo: build
 	bash scripts/demo.sh

@@ -52,7 +52,9 @@ class BinaryReader {
     if (count > max_count || count > (payload_.size() - offset_) / sizeof(T))
       Fail("a vector is too long");
     std::vector<T> values(count);
-    std::memcpy(values.data(), payload_.data() + offset_, count * sizeof(T));
+    // An empty vector's data() may be null, and memcpy from or to null is undefined even for
+    // zero bytes (UBSan reports it).
+    if (count > 0) std::memcpy(values.data(), payload_.data() + offset_, count * sizeof(T));
     offset_ += count * sizeof(T);
     return values;
   }
