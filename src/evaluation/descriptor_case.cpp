@@ -13,10 +13,11 @@ DescriptorCaseResult EvaluateDescriptorCase(const DescriptorCase& test_case,
                                             const DescriptorPrecisionRecallOptions& options,
                                             const std::function<double()>& now_ms) {
   if (!now_ms) throw std::invalid_argument("EvaluateDescriptorCase needs a clock");
+  const FeaturePair made = MakeFeaturePair(pair);
   const double start = now_ms();
   const DescribedImage reference =
-      DetectAndDescribe(test_case.reference, pair, options.max_keypoints);
-  const DescribedImage test = DetectAndDescribe(test_case.test, pair, options.max_keypoints);
+      DetectAndDescribe(test_case.reference, made, options.max_keypoints);
+  const DescribedImage test = DetectAndDescribe(test_case.test, made, options.max_keypoints);
   const double described = now_ms();
 
   std::unique_ptr<KeypointTransfer> transfer;

@@ -30,19 +30,25 @@ void DescriptorPrecisionRecallOptions::Validate() const {
   if (max_keypoints < 1) throw std::invalid_argument("max_keypoints must be at least 1");
 }
 
-DescribedImage DetectAndDescribe(const cv::Mat& image, const features::FeatureOptions& pair,
-                                 int max_keypoints) {
+FeaturePair MakeFeaturePair(const features::FeatureOptions& pair) {
+  return {features::CreateDetector(pair), features::CreateDescriptor(pair)};
+}
+
+DescribedImage DetectAndDescribe(const cv::Mat& image, const FeaturePair& pair, int max_keypoints) {
   if (image.empty() || image.type() != CV_8UC1) {
     throw std::invalid_argument("descriptor evaluation needs a non-empty 8-bit grey image");
   }
-  const cv::Ptr<cv::FeatureDetector> detector = features::CreateDetector(pair);
-  const features::DescriptorKind descriptor = features::CreateDescriptor(pair);
   DescribedImage described;
-  described.norm = descriptor.norm;
-  detector->detect(image, described.keypoints);
+  described.norm = pair.descriptor.norm;
+  pair.detector->detect(image, described.keypoints);
   cv::KeyPointsFilter::retainBest(described.keypoints, max_keypoints);
-  descriptor.extractor->compute(image, described.keypoints, described.descriptors);
+  pair.descriptor.extractor->compute(image, described.keypoints, described.descriptors);
   return described;
+}
+
+DescribedImage DetectAndDescribe(const cv::Mat& image, const features::FeatureOptions& pair,
+                                 int max_keypoints) {
+  return DetectAndDescribe(image, MakeFeaturePair(pair), max_keypoints);
 }
 
 DescriptorPrecisionRecall PrecisionRecall(const DescribedImage& reference,

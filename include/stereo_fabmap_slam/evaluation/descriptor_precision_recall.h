@@ -5,6 +5,7 @@
 #include <opencv2/features2d.hpp>
 
 #include "stereo_fabmap_slam/evaluation/keypoint_transfer.h"
+#include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/features_options.h"
 
 namespace stereo_fabmap_slam::evaluation {
@@ -42,9 +43,20 @@ struct DescriptorPrecisionRecall {
   int correct_possible = 0;     // of those, the ones with a test key point within epsilon
 };
 
-// Detects with the options' detector (keeping the max_keypoints strongest) and describes with
-// its descriptor (which may drop key points near the border). Throws std::invalid_argument for
-// an unknown or unavailable detector/descriptor, or an image that is not 8-bit grey.
+// A detector and a descriptor extractor, made once. Making BRISK builds its sampling pattern,
+// which costs more than describing an image: timed with every image, it would count too.
+struct FeaturePair {
+  cv::Ptr<cv::FeatureDetector> detector;
+  features::DescriptorKind descriptor;
+};
+// Throws std::invalid_argument for an unknown or unavailable detector/descriptor.
+FeaturePair MakeFeaturePair(const features::FeatureOptions& pair);
+
+// Detects with the pair's detector (keeping the max_keypoints strongest) and describes with its
+// descriptor (which may drop key points near the border). Throws std::invalid_argument for an
+// image that is not 8-bit grey.
+DescribedImage DetectAndDescribe(const cv::Mat& image, const FeaturePair& pair, int max_keypoints);
+// The same with a pair made for this image only.
 DescribedImage DetectAndDescribe(const cv::Mat& image, const features::FeatureOptions& pair,
                                  int max_keypoints);
 
