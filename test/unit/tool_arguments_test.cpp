@@ -18,6 +18,7 @@ const std::vector<std::string>& Tools() {
                                                  BENCHMARK_RELOCALIZATION_BIN,
                                                  EUROC_TO_BAG_BIN,
                                                  EVALUATE_DESCRIPTORS_BIN,
+                                                 EVALUATE_PLACE_RECOGNITION_BIN,
                                                  EVALUATE_PNP_BIN,
                                                  EVALUATE_RELOCALIZATION_BIN,
                                                  EVALUATE_TRAJECTORY_BIN,

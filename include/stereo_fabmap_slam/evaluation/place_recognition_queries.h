@@ -1,0 +1,64 @@
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "stereo_fabmap_slam/evaluation/place_ground_truth.h"
+#include "stereo_fabmap_slam/evaluation/place_recognition_precision_recall.h"
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/tf_idf_index.h"
+
+namespace stereo_fabmap_slam::evaluation {
+
+// The frames of one sequence as place recognition sees them, in time order.
+struct PlaceRecognitionFrames {
+  std::vector<std::vector<int>> words;      // per frame: one word per feature (tf-idf)
+  std::vector<std::vector<int>> word_sets;  // per frame: its sorted distinct words (FAB-MAP)
+  std::vector<double> times;                // per frame, non-decreasing: [s] or frame numbers
+  // Earlier frames no more than `window` before a query (same unit as times) are its recent
+  // past, which odometry connects anyway: neither loop candidates nor true loops.
+  double window = 0;
+
+  int size() const { return static_cast<int>(times.size()); }
+  bool IsCandidate(int earlier, int query) const {
+    return earlier < query && times[query] - times[earlier] > window;
+  }
+};
+
+// FAB-MAP's places: one per image (every image becomes a place of its own, as the SLAM map keeps
+// one per keyframe), or updated on revisits (FabMap::Add: the best place takes the view when
+// its posterior reaches match_threshold, otherwise the view becomes a new place).
+enum class PlacesMode { kPerImage, kUpdate };
+const char* PlacesModeName(PlacesMode mode);  // "per-image", "update"
+
+struct ExcludedPairs {
+  long pairs = 0;       // pairs (earlier, query) inside the window
+  long same_place = 0;  // of those, pairs ground truth calls the same place
+};
+ExcludedPairs CountExcludedPairs(const PlaceRecognitionFrames& frames,
+                                 const PlaceGroundTruth& truth);
+
+using QueryProgress = std::function<void(int done, int total)>;
+
+// Each frame in turn is a query against the places built from the frames before it; then it
+// joins the map as `mode` says. The query is compared with the places that hold a frame outside
+// the window (FabMap::Compare over candidates, as loop detection leaves out the recent past):
+// the best of them, its posterior and the new-place probability. A place is the query's true
+// match when ground truth links the query to one of the place's frames outside the window;
+// best_frame is that frame, or the place's latest frame outside the window if none is.
+// declared_new comes from the comparison with the whole map, recent frames included, as Add
+// decides. `fabmap` must be empty; it holds the places afterwards. Throws std::invalid_argument
+// if the frames and the ground truth differ in size.
+std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& frames,
+                                               const PlaceGroundTruth& truth, PlacesMode mode,
+                                               double match_threshold,
+                                               place_recognition::FabMap* fabmap,
+                                               const QueryProgress& progress = nullptr);
+
+// The same queries with the tf-idf cosine, one place per image: the best-scoring earlier image
+// outside the window. `index` must be empty; it holds every frame afterwards.
+std::vector<PlaceQueryResult> RunTfIdfQueries(const PlaceRecognitionFrames& frames,
+                                              const PlaceGroundTruth& truth,
+                                              place_recognition::TfIdfIndex* index);
+
+}  // namespace stereo_fabmap_slam::evaluation

@@ -1,0 +1,63 @@
+#include "stereo_fabmap_slam/evaluation/place_recognition_precision_recall.h"
+
+#include <algorithm>
+
+namespace stereo_fabmap_slam::evaluation {
+
+std::vector<PlacePrecisionRecallPoint> PrecisionRecallCurve(
+    const std::vector<PlaceQueryResult>& results) {
+  std::vector<const PlaceQueryResult*> answered;
+  int with_true_match = 0;
+  for (const PlaceQueryResult& result : results) {
+    with_true_match += result.has_true_match ? 1 : 0;
+    if (result.best_place >= 0) answered.push_back(&result);
+  }
+  std::sort(
+      answered.begin(), answered.end(),
+      [](const PlaceQueryResult* a, const PlaceQueryResult* b) { return a->score > b->score; });
+  std::vector<PlacePrecisionRecallPoint> curve;
+  PlacePrecisionRecallPoint point;
+  for (std::size_t i = 0; i < answered.size(); ++i) {
+    ++point.declared;
+    point.correct += answered[i]->is_true ? 1 : 0;
+    if (i + 1 < answered.size() && answered[i + 1]->score == answered[i]->score) continue;
+    point.threshold = answered[i]->score;
+    point.precision = static_cast<double>(point.correct) / point.declared;
+    point.recall = with_true_match > 0 ? static_cast<double>(point.correct) / with_true_match : 0.0;
+    curve.push_back(point);
+  }
+  return curve;
+}
+
+double RecallAtFullPrecision(const std::vector<PlacePrecisionRecallPoint>& curve) {
+  double recall = 0;
+  for (const PlacePrecisionRecallPoint& point : curve) {
+    if (point.correct != point.declared) break;  // declared only grows: no later point is clean
+    recall = point.recall;
+  }
+  return recall;
+}
+
+double AreaUnderCurve(const std::vector<PlacePrecisionRecallPoint>& curve) {
+  double area = 0, previous_recall = 0;
+  for (const PlacePrecisionRecallPoint& point : curve) {
+    area += (point.recall - previous_recall) * point.precision;
+    previous_recall = point.recall;
+  }
+  return area;
+}
+
+PlaceRecognitionSummary SummarizePlaceRecognition(const std::vector<PlaceQueryResult>& results) {
+  PlaceRecognitionSummary summary;
+  for (const PlaceQueryResult& result : results) {
+    summary.queries += result.has_candidates ? 1 : 0;
+    summary.queries_with_true_match += result.has_true_match ? 1 : 0;
+    summary.declared_new += result.declared_new ? 1 : 0;
+  }
+  const std::vector<PlacePrecisionRecallPoint> curve = PrecisionRecallCurve(results);
+  summary.recall_at_full_precision = RecallAtFullPrecision(curve);
+  summary.auc = AreaUnderCurve(curve);
+  return summary;
+}
+
+}  // namespace stereo_fabmap_slam::evaluation

@@ -1,0 +1,236 @@
+// evaluate_place_recognition end to end (issue 10): the same rendered places seen twice, as a
+// EuRoC-layout sequence with ground-truth poses and as an image folder with a ground-truth
+// matrix, and the figure on MH01_first10s.
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Rows of place_recognition_summary.csv by "method/mode", each column by its header name.
+std::map<std::string, std::map<std::string, std::string>> ReadSummary(const std::string& path) {
+  std::istringstream text(ReadTextFile(path));
+  std::string line;
+  std::getline(text, line);
+  std::vector<std::string> header;
+  std::stringstream names(line);
+  for (std::string name; std::getline(names, name, ',');) header.push_back(name);
+  std::map<std::string, std::map<std::string, std::string>> rows;
+  while (std::getline(text, line)) {
+    std::stringstream fields(line);
+    std::map<std::string, std::string> row;
+    std::string field;
+    for (std::size_t i = 0; i < header.size() && std::getline(fields, field, ','); ++i)
+      row[header[i]] = field;
+    rows[row["method"] + "/" + row["mode"]] = row;
+  }
+  return rows;
+}
+
+double Value(const std::map<std::string, std::map<std::string, std::string>>& summary,
+             const std::string& run, const std::string& column) {
+  const auto row = summary.find(run);
+  if (row == summary.end() || row->second.count(column) == 0) {
+    ADD_FAILURE() << "no " << column << " for " << run;
+    return -1;
+  }
+  return std::stod(row->second.at(column));
+}
+
+// Lines of a EuRoC CSV with the stamp (first field) shifted; `rename` also renames the file
+// named in the second field to "<new stamp>.png".
+std::string ShiftedRows(const std::string& csv, std::int64_t shift_ns, bool rename,
+                        std::vector<std::pair<std::string, std::string>>* renamed) {
+  std::istringstream lines(csv);
+  std::string result;
+  for (std::string line; std::getline(lines, line);) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    const std::size_t comma = line.find(',');
+    const std::string stamp = std::to_string(std::stoll(line.substr(0, comma)) + shift_ns);
+    if (rename) {
+      renamed->emplace_back(line.substr(comma + 1), stamp + ".png");
+      result += stamp + "," + stamp + ".png\n";
+    } else {
+      result += stamp + line.substr(comma) + "\n";
+    }
+  }
+  return result;
+}
+
+class RenderedTwice : public ::testing::Test {
+ protected:
+  // 4 s of the rendered loop (80 frames), once.
+  static void SetUpTestSuite() {
+    temp_ = new TemporaryDirectory();
+    std::string output;
+    ASSERT_EQ(RunCommand(std::string(MAKE_SYNTHETIC_SEQUENCE_BIN) + " --output " + temp_->path() +
+                             "/once --route loop --seconds 4 --seed 1 --no-bag 2>&1",
+                         &output),
+              0)
+        << output;
+  }
+  static void TearDownTestSuite() {
+    delete temp_;
+    temp_ = nullptr;
+  }
+  static TemporaryDirectory* temp_;
+};
+
+TemporaryDirectory* RenderedTwice::temp_ = nullptr;
+
+// The same images again 5.55 s later, ground truth and all: the second pass revisits every
+// place of the first exactly, and its frames' twins lie 5.55 s back, outside the default 5 s
+// window, while the first pass has no frame old enough to be a candidate. (Not 5.5 s: pairs
+// exactly 5 s apart would sit on the window's edge, decided by rounding.)
+TEST_F(RenderedTwice, SequenceWithPosesFindsEveryRevisit) {
+  const fs::path once = fs::path(temp_->path()) / "once/mav0";
+  const fs::path twice = fs::path(temp_->path()) / "twice/mav0";
+  ASSERT_TRUE(CopyTree(once.parent_path().string(), twice.parent_path().string()));
+  const std::int64_t shift = 5'550'000'000;
+  for (const char* camera : {"cam0", "cam1"}) {
+    const std::string csv = ReadTextFile((once / camera / "data.csv").string());
+    std::vector<std::pair<std::string, std::string>> renamed;
+    const std::string again = ShiftedRows(csv, shift, true, &renamed);
+    for (const auto& [from, to] : renamed)
+      fs::copy_file(once / camera / "data" / from, twice / camera / "data" / to);
+    WriteTextFile((twice / camera / "data.csv").string(), csv + again);
+  }
+  const fs::path truth = fs::path("state_groundtruth_estimate0") / "data.csv";
+  const std::string poses = ReadTextFile((once / truth).string());
+  WriteTextFile((twice / truth).string(), poses + ShiftedRows(poses, shift, false, nullptr));
+
+  std::string output;
+  const std::string out = temp_->path() + "/twice_out";
+  ASSERT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " +
+                           twice.parent_path().string() + " --every 2 --output " + out + " --json",
+                       &output),
+            0)
+      << output;
+  EXPECT_EQ(output.rfind("{\"source\": ", 0), 0u) << output;
+  const auto summary = ReadSummary(out + "/place_recognition_summary.csv");
+  RecordProperty("summary", ReadTextFile(out + "/place_recognition_summary.csv"));
+  for (const char* run : {"fabmap/per-image", "fabmap/update", "tfidf/per-image"}) {
+    SCOPED_TRACE(run);
+    // 40 frames a pass: every frame of the second pass, and only those, has a true match (its
+    // twin); pairs within 5 s: the first pass's 40 x 39 / 2, the same in the second, and
+    // between them the 34 x 35 / 2 no more than 5 s apart (second-pass frame a, first-pass
+    // frame b, 0.1 s apart each: 5.55 + 0.1 a - 0.1 b <= 5 for b >= a + 6).
+    EXPECT_EQ(Value(summary, run, "queries"), 40);
+    EXPECT_EQ(Value(summary, run, "queries_with_true_match"), 40);
+    EXPECT_EQ(Value(summary, run, "excluded_pairs"), 2 * 780 + 595);
+    // Identical images differ in words only where the stream-adapted detector thresholds
+    // differ; one query in ten may go to a look-alike view of the hall's repeated photos.
+    EXPECT_GE(Value(summary, run, "recall_at_100_precision"), 0.9);
+    EXPECT_GE(Value(summary, run, "auc"), 0.9);
+  }
+  const std::string pr = ReadTextFile(out + "/place_recognition_pr.csv");
+  EXPECT_EQ(pr.rfind("method,mode,threshold,precision,recall,declared,correct\n", 0), 0u);
+  EXPECT_NE(ReadTextFile(out + "/place_recognition_queries.csv").find("\nfabmap,update,"),
+            std::string::npos);
+}
+
+// The same pass twice as an image folder with a benchmark's matrix: frames within 2 of each
+// other (0.2 s, 0.2 m) are the same place, in a pass and across the two.
+TEST_F(RenderedTwice, ImageFolderWithMatrixFindsEveryRevisit) {
+  const fs::path once = fs::path(temp_->path()) / "once/mav0/cam0";
+  const fs::path folder = fs::path(temp_->path()) / "folder";
+  fs::create_directories(folder);
+  std::istringstream lines(ReadTextFile((once / "data.csv").string()));
+  std::vector<std::string> images;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    images.push_back(line.substr(line.find(',') + 1));
+  }
+  ASSERT_EQ(images.size(), 80u);
+  const int n = 40;  // every second frame
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int i = 0; i < n; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%03d.png", pass * n + i);
+      fs::copy_file(once / "data" / images[static_cast<std::size_t>(2 * i)], folder / name);
+    }
+  }
+  std::string matrix;
+  for (int a = 0; a < 2 * n; ++a) {
+    for (int b = 0; b < 2 * n; ++b)
+      matrix += std::string(b > 0 ? "," : "") + (std::abs(a % n - b % n) <= 2 ? "1" : "0");
+    matrix += "\n";
+  }
+  WriteTextFile(temp_->path() + "/matrix.csv", matrix);
+
+  std::string output;
+  const std::string out = temp_->path() + "/folder_out";
+  const std::string command = std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + folder.string() +
+                              " --ground-truth " + temp_->path() + "/matrix.csv --exclude-frames " +
+                              std::to_string(n - 1) + " --output " + out;
+  ASSERT_EQ(RunCommand(command + " 2>/dev/null", &output), 0) << output;
+  EXPECT_NE(output.find("recall@P1"), std::string::npos) << output;
+  const auto summary = ReadSummary(out + "/place_recognition_summary.csv");
+  for (const char* run : {"fabmap/per-image", "fabmap/update", "tfidf/per-image"}) {
+    SCOPED_TRACE(run);
+    EXPECT_EQ(Value(summary, run, "queries"), n);  // the second pass
+    EXPECT_EQ(Value(summary, run, "queries_with_true_match"), n);
+    EXPECT_GE(Value(summary, run, "recall_at_100_precision"), 0.9);  // as above
+  }
+  // A matrix that does not fit the folder is an error, not a measurement.
+  WriteTextFile(temp_->path() + "/small.csv", "1,0\n0,1\n");
+  EXPECT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + folder.string() +
+                           " --ground-truth " + temp_->path() + "/small.csv 2>&1",
+                       &output),
+            1);
+  EXPECT_NE(output.find("2 x 2 matrix for 80 images"), std::string::npos) << output;
+}
+
+// The figure reported for issue 10 on real data: MH01's first 10 s (200 frames, 83 queries with
+// a true match outside the 5 s window) gave FAB-MAP with places updated on revisits a recall of
+// 16.9 % (14 queries) at 100 % precision, tf-idf 41.0 %. One place per image gave 0 %: its
+// posteriors saturate near the smoothing's 0.99 for every query, so the top of the ranking is a
+// wrong match and the figure cannot fall; it is not asserted. The run is deterministic, so the
+// margin is for deliberate changes to features or FAB-MAP, not noise: 5 queries (6 %) may be
+// lost before the test asks for a look; fewer would flag every small reordering of the top
+// answers, which decides this fragile statistic.
+TEST(EvaluatePlaceRecognitionTool, Mh01RecallAtFullPrecision) {
+  TemporaryDirectory temp;
+  std::string output;
+  ASSERT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " +
+                           EurocSequencePath("MH01_first10s") + " --output " + temp.path() +
+                           " --json 2>/dev/null",
+                       &output),
+            0)
+      << output;
+  const auto summary = ReadSummary(temp.path() + "/place_recognition_summary.csv");
+  RecordProperty("summary", ReadTextFile(temp.path() + "/place_recognition_summary.csv"));
+  EXPECT_GT(Value(summary, "fabmap/update", "queries_with_true_match"), 50);
+  EXPECT_GT(Value(summary, "fabmap/update", "excluded_pairs"), 0);
+  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"), 0.169 - 0.06);
+}
+
+TEST(EvaluatePlaceRecognitionTool, InputWithoutImagesIsAnError) {
+  TemporaryDirectory temp;
+  std::string output;
+  EXPECT_NE(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() + " 2>&1",
+                       &output),
+            0);
+  WriteTextFile(temp.path() + "/gt.csv", "1\n");
+  EXPECT_NE(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() +
+                           " --ground-truth " + temp.path() + "/gt.csv 2>&1",
+                       &output),
+            0);
+  EXPECT_NE(output.find("no images"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test

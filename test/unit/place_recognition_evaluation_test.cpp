@@ -1,0 +1,323 @@
+// Place recognition measured against ground truth (issue 10): the precision-recall sweep, the
+// tf-idf baseline, the ground-truth matrix and poses, and the queries of FAB-MAP and tf-idf on
+// a hand-built case whose answers are known.
+#include <cmath>
+#include <optional>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "stereo_fabmap_slam/evaluation/place_ground_truth.h"
+#include "stereo_fabmap_slam/evaluation/place_recognition_precision_recall.h"
+#include "stereo_fabmap_slam/evaluation/place_recognition_queries.h"
+#include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
+#include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/tf_idf_index.h"
+#include "test_support.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+using evaluation::PlaceGroundTruth;
+using evaluation::PlaceQueryResult;
+using place_recognition::TfIdfIndex;
+
+PlaceQueryResult Answer(int query, double score, bool is_true, bool has_true_match) {
+  PlaceQueryResult result;
+  result.query = query;
+  result.has_candidates = true;
+  result.has_true_match = has_true_match;
+  result.best_place = 0;
+  result.best_frame = 0;
+  result.score = score;
+  result.is_true = is_true;
+  return result;
+}
+
+TEST(PlaceRecognitionPrecisionRecall, HandBuiltCurve) {
+  std::vector<PlaceQueryResult> results = {Answer(1, 0.6, true, true), Answer(2, 0.9, true, true),
+                                           Answer(3, 0.7, false, true), Answer(4, 0.8, true, true),
+                                           Answer(5, 0.5, false, false)};
+  PlaceQueryResult unanswered;  // a true match exists, but no candidate was returned
+  unanswered.query = 6;
+  unanswered.has_candidates = true;
+  unanswered.has_true_match = true;
+  results.push_back(unanswered);
+  PlaceQueryResult first;  // nothing earlier outside the window: not a query
+  results.insert(results.begin(), first);
+
+  // Five queries have a true match. Declared from the top: 0.9 right, 0.8 right, 0.7 wrong,
+  // 0.6 right, 0.5 wrong.
+  const std::vector<evaluation::PlacePrecisionRecallPoint> curve =
+      evaluation::PrecisionRecallCurve(results);
+  ASSERT_EQ(curve.size(), 5u);
+  const double thresholds[] = {0.9, 0.8, 0.7, 0.6, 0.5};
+  const int declared[] = {1, 2, 3, 4, 5}, correct[] = {1, 2, 2, 3, 3};
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    EXPECT_DOUBLE_EQ(curve[i].threshold, thresholds[i]);
+    EXPECT_EQ(curve[i].declared, declared[i]);
+    EXPECT_EQ(curve[i].correct, correct[i]);
+    EXPECT_DOUBLE_EQ(curve[i].precision, static_cast<double>(correct[i]) / declared[i]);
+    EXPECT_DOUBLE_EQ(curve[i].recall, correct[i] / 5.0);
+  }
+  EXPECT_DOUBLE_EQ(evaluation::RecallAtFullPrecision(curve), 0.4);
+  // 0.2 x 1 + 0.2 x 1 + 0 x 2/3 + 0.2 x 3/4 + 0 x 3/5.
+  EXPECT_DOUBLE_EQ(evaluation::AreaUnderCurve(curve), 0.55);
+
+  const evaluation::PlaceRecognitionSummary summary =
+      evaluation::SummarizePlaceRecognition(results);
+  EXPECT_EQ(summary.queries, 6);
+  EXPECT_EQ(summary.queries_with_true_match, 5);
+  EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 0.4);
+  EXPECT_DOUBLE_EQ(summary.auc, 0.55);
+}
+
+TEST(PlaceRecognitionPrecisionRecall, TiedScoresAreDeclaredTogether) {
+  // A right and a wrong answer with the same score: no threshold takes the right one alone.
+  const std::vector<evaluation::PlacePrecisionRecallPoint> curve =
+      evaluation::PrecisionRecallCurve({Answer(1, 0.7, true, true), Answer(2, 0.7, false, true)});
+  ASSERT_EQ(curve.size(), 1u);
+  EXPECT_EQ(curve[0].declared, 2);
+  EXPECT_DOUBLE_EQ(curve[0].precision, 0.5);
+  EXPECT_DOUBLE_EQ(evaluation::RecallAtFullPrecision(curve), 0.0);
+  EXPECT_DOUBLE_EQ(evaluation::AreaUnderCurve(curve), 0.25);
+  EXPECT_TRUE(evaluation::PrecisionRecallCurve({}).empty());
+}
+
+TEST(TfIdfIndex, InverseDocumentFrequencyFromTrainingImages) {
+  const std::vector<double> idf = TfIdfIndex::InverseDocumentFrequency({{0, 1}, {0}, {0, 2, 2}}, 4);
+  ASSERT_EQ(idf.size(), 4u);
+  EXPECT_DOUBLE_EQ(idf[0], 0.0);            // in every image: says nothing
+  EXPECT_DOUBLE_EQ(idf[1], std::log(2.0));  // (3 + 1) / (1 + 1)
+  EXPECT_DOUBLE_EQ(idf[2], std::log(2.0));  // counted once per image
+  EXPECT_DOUBLE_EQ(idf[3], std::log(4.0));  // never seen: the largest weight
+  EXPECT_THROW(TfIdfIndex::InverseDocumentFrequency({{4}}, 4), std::invalid_argument);
+}
+
+TEST(TfIdfIndex, CosineOfHandMadeWordLists) {
+  TfIdfIndex index({1.0, 1.0, 2.0, 0.0});
+  EXPECT_EQ(index.Add({0, 0, 1}), 0);  // tf-idf (2, 1, 0, 0) / sqrt(5)
+  EXPECT_EQ(index.Add({2}), 1);        // (0, 0, 1, 0)
+  EXPECT_EQ(index.Add({3, 3}), 2);     // only a word of idf 0: no vector, scores 0
+  EXPECT_EQ(index.size(), 3);
+  // (1, 2, 0, 0) / sqrt(5): with image 0, (2 + 2) / 5.
+  std::vector<double> scores = index.Score({1, 0, 1});
+  ASSERT_EQ(scores.size(), 3u);
+  EXPECT_NEAR(scores[0], 0.8, 1e-6);
+  EXPECT_DOUBLE_EQ(scores[1], 0.0);
+  EXPECT_DOUBLE_EQ(scores[2], 0.0);
+  // (1, 0, 2, 0) / sqrt(5): with image 0, 2 / 5; with image 1, 2 / sqrt(5).
+  scores = index.Score({0, 2});
+  EXPECT_NEAR(scores[0], 0.4, 1e-6);
+  EXPECT_NEAR(scores[1], 2 / std::sqrt(5.0), 1e-6);
+  // An image scores 1 with itself, and the order of its words does not matter.
+  EXPECT_NEAR(index.Score({1, 0, 0})[0], 1.0, 1e-6);
+  EXPECT_THROW(index.Score({4}), std::invalid_argument);
+  EXPECT_THROW(index.Add({-1}), std::invalid_argument);
+  EXPECT_THROW(TfIdfIndex({}), std::invalid_argument);
+}
+
+TEST(PlaceGroundTruth, ReadsCsvTextAndImageMatrices) {
+  TemporaryDirectory temp;
+  // One triangle filled, as benchmarks often ship it: read symmetrically.
+  WriteTextFile(temp.path() + "/gt.csv", "1,0,1\n0,1,0\n0,0,1\n");
+  WriteTextFile(temp.path() + "/gt.txt", "# a comment\n1 0 0\n0 1 0.5\n0 0 1\n");
+  cv::Mat image = cv::Mat::zeros(3, 3, CV_8U);
+  image.at<unsigned char>(1, 0) = 255;
+  ASSERT_TRUE(cv::imwrite(temp.path() + "/gt.png", image));
+
+  const PlaceGroundTruth csv = PlaceGroundTruth::Load(temp.path() + "/gt.csv");
+  ASSERT_EQ(csv.size(), 3);
+  EXPECT_TRUE(csv.Same(0, 2));
+  EXPECT_TRUE(csv.Same(2, 0));
+  EXPECT_FALSE(csv.Same(0, 1));
+  EXPECT_FALSE(csv.Same(1, 2));
+  EXPECT_EQ(csv.SamePairs(), 1);
+
+  const PlaceGroundTruth text = PlaceGroundTruth::Load(temp.path() + "/gt.txt");
+  ASSERT_EQ(text.size(), 3);
+  EXPECT_TRUE(text.Same(2, 1));  // any non-zero number
+  EXPECT_FALSE(text.Same(0, 2));
+
+  const PlaceGroundTruth png = PlaceGroundTruth::Load(temp.path() + "/gt.png");
+  ASSERT_EQ(png.size(), 3);
+  EXPECT_TRUE(png.Same(0, 1));
+  EXPECT_FALSE(png.Same(0, 2));
+  EXPECT_EQ(png.SamePairs(), 1);
+
+  const PlaceGroundTruth subset = csv.Subset({0, 2});
+  ASSERT_EQ(subset.size(), 2);
+  EXPECT_TRUE(subset.Same(0, 1));
+  EXPECT_THROW(csv.Subset({3}), std::out_of_range);
+}
+
+TEST(PlaceGroundTruth, RefusesMatricesThatAreNotSquare) {
+  TemporaryDirectory temp;
+  WriteTextFile(temp.path() + "/short_row.csv", "1,0,1\n0,1\n0,0,1\n");
+  try {
+    PlaceGroundTruth::Load(temp.path() + "/short_row.csv");
+    ADD_FAILURE() << "a short row was accepted";
+  } catch (const io::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("short_row.csv:2"), std::string::npos) << error.what();
+  }
+  WriteTextFile(temp.path() + "/word.csv", "1,x\n0,1\n");
+  EXPECT_THROW(PlaceGroundTruth::Load(temp.path() + "/word.csv"), io::InputError);
+  ASSERT_TRUE(cv::imwrite(temp.path() + "/wide.png", cv::Mat::zeros(3, 4, CV_8U)));
+  EXPECT_THROW(PlaceGroundTruth::Load(temp.path() + "/wide.png"), io::InputError);
+  EXPECT_THROW(PlaceGroundTruth::Load(temp.path() + "/missing.png"), io::InputError);
+}
+
+TEST(PlaceGroundTruth, FromPosesUsesTheVisibleFraction) {
+  geometry::StereoCamera camera;
+  camera.size = cv::Size(640, 480);
+  camera.fx = camera.fy = 500;
+  camera.cx = 320;
+  camera.cy = 240;
+  camera.baseline = 0.1;
+  // A wall of points 5 m ahead, filling the middle of the image.
+  std::vector<Eigen::Vector3d> wall;
+  for (int x = -5; x <= 5; ++x) {
+    for (int y = -3; y <= 3; ++y) wall.emplace_back(0.2 * x, 0.2 * y, 5.0);
+  }
+  const auto pose = [](double x, double yaw_deg) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation().x() = x;
+    T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitY()).matrix();
+    return std::optional<Eigen::Isometry3d>(T);
+  };
+  // 0: the reference; 1: 0.2 m to the side (the wall stays in view); 2: turned round;
+  // 3: without ground truth; 4: 5 m to the side, the wall out of view; 5: no points of its
+  // own, at the reference's pose; 6: 3 m to the side, where the wall's points at x >= -0.2 m,
+  // 7 of its 11 columns, land at u >= 0 (u = 500 (x - 3) / 5 + 320).
+  const std::vector<std::optional<Eigen::Isometry3d>> poses = {
+      pose(0, 0), pose(0.2, 0), pose(0, 180), std::nullopt, pose(5.0, 0), pose(0, 0), pose(3, 0)};
+  const std::vector<std::vector<Eigen::Vector3d>> points = {wall, wall, wall, wall, wall, {}, wall};
+  const PlaceGroundTruth truth = PlaceGroundTruth::FromPoses(points, poses, camera, 0.5);
+  ASSERT_EQ(truth.size(), 7);
+  EXPECT_TRUE(truth.Same(0, 1));
+  EXPECT_FALSE(truth.Same(0, 2));
+  EXPECT_FALSE(truth.Same(0, 3));
+  EXPECT_FALSE(truth.Same(0, 4));
+  // Frame 5 has no points, but frame 0's points all land in its image: either direction counts.
+  EXPECT_TRUE(truth.Same(0, 5));
+  EXPECT_TRUE(truth.Same(5, 0));
+  // 7 / 11 = 0.64 of the points in view: the same place up to tau 0.64, not above.
+  EXPECT_TRUE(truth.Same(0, 6));
+  EXPECT_TRUE(PlaceGroundTruth::FromPoses(points, poses, camera, 0.63).Same(0, 6));
+  EXPECT_FALSE(PlaceGroundTruth::FromPoses(points, poses, camera, 0.65).Same(0, 6));
+  EXPECT_THROW(PlaceGroundTruth::FromPoses(points, poses, camera, 0.0), std::invalid_argument);
+  EXPECT_THROW(PlaceGroundTruth::FromPoses({wall}, poses, camera, 0.5), std::invalid_argument);
+}
+
+// `count` distinct random words of the block [first, first + size).
+std::vector<int> RandomWords(int first, int size, int count, std::mt19937* random) {
+  std::uniform_int_distribution<int> word(first, first + size - 1);
+  std::set<int> words;
+  while (static_cast<int>(words.size()) < count) words.insert(word(*random));
+  return std::vector<int>(words.begin(), words.end());
+}
+
+// Two passes over ten places. The vocabulary of 300 words falls into ten blocks of 30 that
+// occur together (the training images show 15 words of one block each, so the Chow-Liu tree
+// learns that), and place k shows 20 words of block k: places share no word. The second pass
+// shows 10 of each place's words and 5 others of its block, as a revisit does. Frame 10 + k
+// revisits frame k and nothing else.
+struct TwoPasses {
+  evaluation::PlaceRecognitionFrames frames;
+  cv::Mat same = cv::Mat::eye(20, 20, CV_8U);
+  std::vector<std::vector<int>> training;
+};
+
+TwoPasses MakeTwoPasses() {
+  std::mt19937 random(7);
+  TwoPasses passes;
+  for (int i = 0; i < 200; ++i)
+    passes.training.push_back(RandomWords(30 * (i % 10), 30, 15, &random));
+  for (int k = 0; k < 10; ++k)
+    passes.frames.word_sets.push_back(RandomWords(30 * k, 30, 20, &random));
+  for (int k = 0; k < 10; ++k) {
+    const std::vector<int>& place = passes.frames.word_sets[static_cast<std::size_t>(k)];
+    std::set<int> words(place.begin(), place.begin() + 10);
+    while (words.size() < 15) words.insert(RandomWords(30 * k, 30, 1, &random).front());
+    passes.frames.word_sets.emplace_back(words.begin(), words.end());
+    passes.same.at<unsigned char>(k, 10 + k) = 1;
+  }
+  passes.frames.words = passes.frames.word_sets;
+  for (int i = 0; i < 20; ++i) passes.frames.times.push_back(i);
+  passes.frames.window = 2;  // frames j - 1 and j - 2 are the recent past of frame j
+  // A same-place pair inside the window: excluded, and counted as such.
+  passes.same.at<unsigned char>(18, 19) = 1;
+  return passes;
+}
+
+TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
+  const TwoPasses passes = MakeTwoPasses();
+  const PlaceGroundTruth truth(passes.same);
+  const evaluation::ExcludedPairs excluded = evaluation::CountExcludedPairs(passes.frames, truth);
+  EXPECT_EQ(excluded.pairs, 1 + 2 * 18);  // frame 1 has one frame before it, the others two
+  EXPECT_EQ(excluded.same_place, 1);
+
+  const place_recognition::ChowLiuTree tree =
+      place_recognition::ChowLiuTree::Train(passes.training, 300);
+  for (const evaluation::PlacesMode mode :
+       {evaluation::PlacesMode::kPerImage, evaluation::PlacesMode::kUpdate}) {
+    SCOPED_TRACE(evaluation::PlacesModeName(mode));
+    place_recognition::FabMapOptions options;
+    place_recognition::FabMap fabmap(tree, options);
+    const std::vector<PlaceQueryResult> results =
+        evaluation::RunFabMapQueries(passes.frames, truth, mode, options.match_threshold, &fabmap);
+    ASSERT_EQ(results.size(), 20u);
+    for (int j = 0; j < 20; ++j) {
+      const PlaceQueryResult& result = results[static_cast<std::size_t>(j)];
+      EXPECT_EQ(result.has_candidates, j >= 3) << j;
+      EXPECT_EQ(result.has_true_match, j >= 10) << j;
+      if (j >= 10) {
+        // Each revisit finds its place, far above the unrelated ones.
+        EXPECT_EQ(result.best_frame, j - 10);
+        EXPECT_TRUE(result.is_true);
+        EXPECT_GT(result.score, 0.9);
+      } else if (j >= 3) {
+        EXPECT_LT(result.score, 0.1) << j;
+        EXPECT_GT(result.new_place_probability, 0.9) << j;
+      }
+    }
+    const evaluation::PlaceRecognitionSummary summary =
+        evaluation::SummarizePlaceRecognition(results);
+    EXPECT_EQ(summary.queries, 17);
+    EXPECT_EQ(summary.queries_with_true_match, 10);
+    EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 1.0);
+    EXPECT_DOUBLE_EQ(summary.auc, 1.0);
+    // Updating: the first pass makes ten places, the revisits update them.
+    if (mode == evaluation::PlacesMode::kUpdate) {
+      EXPECT_EQ(summary.declared_new, 10);
+      EXPECT_EQ(fabmap.places().size(), 10);
+    } else {
+      EXPECT_EQ(fabmap.places().size(), 20);
+    }
+  }
+
+  TfIdfIndex index(TfIdfIndex::InverseDocumentFrequency(passes.training, 300));
+  const std::vector<PlaceQueryResult> results =
+      evaluation::RunTfIdfQueries(passes.frames, truth, &index);
+  ASSERT_EQ(results.size(), 20u);
+  for (int j = 10; j < 20; ++j) EXPECT_EQ(results[static_cast<std::size_t>(j)].best_frame, j - 10);
+  const evaluation::PlaceRecognitionSummary summary =
+      evaluation::SummarizePlaceRecognition(results);
+  EXPECT_EQ(summary.queries_with_true_match, 10);
+  EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 1.0);
+  EXPECT_EQ(summary.declared_new, 0);  // tf-idf has no new-place decision
+}
+
+TEST(PlaceRecognitionQueries, RefusesMismatchedInput) {
+  TwoPasses passes = MakeTwoPasses();
+  const PlaceGroundTruth truth(cv::Mat::eye(19, 19, CV_8U));
+  TfIdfIndex index(std::vector<double>(300, 1.0));
+  EXPECT_THROW(evaluation::RunTfIdfQueries(passes.frames, truth, &index), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
