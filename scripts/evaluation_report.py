@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes output/evaluation/report.md and its plots from the CSV and JSON files that
 scripts/evaluate.sh had the evaluation tools write (evaluate_descriptors, evaluate_pnp,
+evaluate_place_recognition,
 run_dataset with the keyframe presets, evaluate_relocalization).
 
 usage: evaluation_report.py EVALUATION_DIR
@@ -199,6 +200,47 @@ def preset_section(directory):
     return "\n".join(text)
 
 
+def place_recognition_section(directory):
+    folder = os.path.join(directory, "place_recognition")
+    if not os.path.isdir(folder):
+        return ""
+    text = ["## Place recognition: FAB-MAP alone and a tf-idf baseline (`evaluate_place_recognition`)\n"]
+    text.append(
+        "Every frame in turn queries the earlier frames' places (frames within the exclusion "
+        "window excluded); the acceptance threshold is swept. Ground truth: two frames show one "
+        "place when at least half of one's stereo points land in the other's image. FAB-MAP "
+        "with one place per image, and with places updated on revisits; tf-idf cosine over "
+        "the same words.\n\n")
+    rows = []
+    labels = sorted(os.listdir(folder))
+    figure, axes = plt.subplots(1, len(labels), figsize=(4.5 * len(labels), 4), squeeze=False)
+    for index, label in enumerate(labels):
+        summary = read_csv(os.path.join(folder, label, "place_recognition_summary.csv"))
+        curves = read_csv(os.path.join(folder, label, "place_recognition_pr.csv"))
+        for row in summary:
+            rows.append([label, row["method"], row["mode"], row["queries_with_true_match"],
+                         f"{100 * number(row['recall_at_100_precision']):.1f} %",
+                         f"{number(row['auc']):.3f}", row.get("declared_new_places", "–")])
+        axis = axes[0][index]
+        for row in summary:
+            points = [(number(r["recall"]), number(r["precision"])) for r in curves
+                      if r["method"] == row["method"] and r["mode"] == row["mode"]]
+            axis.plot([p[0] for p in points], [p[1] for p in points],
+                      label=f"{row['method']} ({row['mode']})")
+        axis.set_title(f"Place recognition: {label}")
+        axis.set_xlabel("recall")
+        axis.set_ylabel("precision")
+        axis.set_xlim(0, 1)
+        axis.set_ylim(0, 1.02)
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize="x-small")
+    text.append(table(["sequence", "method", "places", "queries with a true match",
+                       "recall at 100 % precision", "AUC", "new places declared"], rows))
+    name = save(figure, directory, "place_recognition_pr.png")
+    text.append(f"\n![Place recognition precision-recall]({name})\n")
+    return "\n".join(text)
+
+
 def relocalization_plots(folder, directory, label):
     frames = read_csv(os.path.join(folder, "frames.csv"))
     recall = read_csv(os.path.join(folder, "recall.csv"))
@@ -263,17 +305,20 @@ def relocalization_section(directory):
         s = read_json(summary_path)
         thesis = next((v for k, v in THESIS_RELOCALIZATION.items() if label.startswith(k)), "")
         estimated_share = s["estimated_frames"] / s["test_frames"] if s["test_frames"] else 0
+        failures = ", ".join(f"{count} {outcome}" for outcome, count in
+                             sorted(s.get("outcomes", {}).items()) if outcome != "success")
         rows.append([
             label, s["map_keyframes"], s["test_frames"], s["relevant_frames"],
             f"{100 * estimated_share:.1f} %", f"{s['recall']:.2f}",
             f"{100 * s['error_below_10cm_fraction']:.0f} %",
             f"{100 * s['error_median_m']:.1f}" if s["error_median_m"] is not None else "–",
-            s["wrong_estimates"], thesis
+            s["wrong_estimates"], failures or "–", thesis
         ])
         pictures += relocalization_plots(os.path.join(folder, label), directory, label)
     text.append(table(["sequence", "map keyframes", "test frames", "relevant (τ 0.9)",
                        "with a pose", "recall (τ 0.9, 0.5 m)", "estimates < 10 cm",
-                       "median error [cm]", "wrong (> 0.5 m)", "thesis"], rows))
+                       "median error [cm]", "wrong (> 0.5 m)", "attempts without a pose",
+                       "thesis"], rows))
     text += [f"\n![{name}]({name})\n" for name in pictures]
     return "\n".join(text)
 
@@ -287,7 +332,8 @@ def main():
     if os.path.exists(info):
         with open(info) as file:
             parts.append("```\n" + file.read().strip() + "\n```\n")
-    for section in (descriptor_section, pnp_section, preset_section, relocalization_section):
+    for section in (descriptor_section, pnp_section, preset_section, place_recognition_section,
+                    relocalization_section):
         part = section(directory)
         if part:
             parts.append(part)

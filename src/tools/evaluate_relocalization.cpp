@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -31,16 +32,18 @@ constexpr char kUsage[] =
     "                               [--every N] [--tau T] [--dmax M] [--json] [--output DIR]\n"
     "                               [--config FILE] [--fabmap-config FILE] [--quiet]\n"
     "Maps the frames of the mapping segments (seconds from the first frame; --map-until S is\n"
-    "0-S; default: the first half), then relocalizes every N-th other frame (default 1) that has\n"
+    "0-S; default: the first half of the frames with ground truth), then relocalizes every N-th "
+    "other frame (default 1) that has\n"
     "ground truth against that map, mapping off. A test frame is relevant at tau when at least\n"
     "the fraction tau of some keyframe's 3-D points, carried by ground truth into it, land in\n"
     "its image; recall(tau, dmax) is the share of relevant frames relocalized with a\n"
     "keyframe-to-frame translation error of at most dmax metres (defaults 0.9, 0.5).\n"
     "  --json          print one JSON object (test_frames, relevant_frames, estimated_frames,\n"
     "                  recall, error_below_10cm_fraction, error_median_m, wrong_estimates, ...)\n"
-    "  --output DIR    write frames.csv (every frame: ground truth, mapping, relevance, "
-    "estimate),\n"
-    "                  recall.csv (recall against tau for dmax 0.1, 0.25, 0.5, 1 m), summary.json\n"
+    "  --output DIR    write frames.csv (every frame: ground truth, mapping, relevance,\n"
+    "                  estimate, the relocalizer's outcome), recall.csv (recall against tau\n"
+    "                  for dmax 0.1, 0.25, 0.5, 1 m), summary.json (as --json, with the count\n"
+    "                  of each outcome)\n"
     "  --quiet         no progress on stderr\n";
 
 // [s] A frame's ground truth is interpolated between two poses at most this far apart (EuRoC's
@@ -112,6 +115,7 @@ struct FrameRow {
   std::optional<Eigen::Isometry3d> truth;
   std::optional<evaluation::RelocalizationTrial> trial;
   std::optional<Eigen::Vector3d> keyframe_position;  // ground truth of the keyframe found
+  std::string outcome;  // the relocalizer's status: why a test frame got no pose
 };
 
 std::string Number(double value) {
@@ -121,8 +125,18 @@ std::string Number(double value) {
   return buffer;
 }
 
+// {"success": 63, "too few matches": 30, ...}: how the test frames' attempts ended.
+std::string OutcomesJson(const std::map<std::string, int>& outcomes) {
+  std::string json = "{";
+  for (const auto& [outcome, count] : outcomes) {
+    json += (json.size() > 1 ? ", \"" : "\"") + outcome + "\": " + std::to_string(count);
+  }
+  return json + "}";
+}
+
 std::string SummaryJson(const std::string& sequence, const evaluation::RelocalizationSummary& s,
-                        double tau, double dmax, std::size_t keyframes, std::size_t map_frames) {
+                        double tau, double dmax, std::size_t keyframes, std::size_t map_frames,
+                        const std::map<std::string, int>& outcomes, int unmeasured) {
   return "{\"sequence\": \"" + sequence + "\", \"map_frames\": " + std::to_string(map_frames) +
          ", \"map_keyframes\": " + std::to_string(keyframes) +
          ", \"test_frames\": " + std::to_string(s.test_frames) +
@@ -132,7 +146,9 @@ std::string SummaryJson(const std::string& sequence, const evaluation::Relocaliz
          ", \"recall\": " + Number(s.recall) +
          ", \"error_below_10cm_fraction\": " + Number(s.error_below_10cm_fraction) +
          ", \"error_median_m\": " + Number(s.error_median_m) +
-         ", \"wrong_estimates\": " + std::to_string(s.wrong_estimates) + "}\n";
+         ", \"wrong_estimates\": " + std::to_string(s.wrong_estimates) +
+         ", \"unmeasured_estimates\": " + std::to_string(unmeasured) +
+         ", \"outcomes\": " + OutcomesJson(outcomes) + "}\n";
 }
 
 void WriteText(const std::string& path, const std::string& text) {
@@ -146,7 +162,7 @@ void WriteOutputs(const std::string& directory, const std::vector<FrameRow>& row
                   const std::string& summary_json) {
   std::string frames =
       "time,mapping,x,y,z,relevance,estimated,keyframe,keyframe_x,keyframe_y,keyframe_z,"
-      "error_m,estimated_distance_m\n";
+      "error_m,estimated_distance_m,outcome\n";
   for (const FrameRow& row : rows) {
     frames += Number(row.seconds) + "," + (row.mapping ? "1" : "0");
     for (int axis = 0; axis < 3; ++axis)
@@ -163,7 +179,7 @@ void WriteOutputs(const std::string& directory, const std::vector<FrameRow>& row
     } else {
       frames += ",,,,,,";
     }
-    frames += "\n";
+    frames += "," + row.outcome + "\n";
   }
   WriteText(directory + "/frames.csv", frames);
 
@@ -222,7 +238,16 @@ int main(int argc, char** argv) {
 
     const double start = sequence.frames().front().timestamp_ns * 1e-9;
     const double length = sequence.frames().back().timestamp_ns * 1e-9 - start;
-    std::vector<Segment> segments{{0.0, 0.5 * length}};
+    // By default the first half of the frames with ground truth is mapped: a keyframe mapped
+    // before the ground truth begins (EuRoC's first seconds) could be found but not measured.
+    double truth_start = length;
+    for (const datasets::StereoFrameEntry& frame : sequence.frames()) {
+      if (evaluation::InterpolatePose(truth, frame.timestamp_ns * 1e-9, kGroundTruthMaxGap)) {
+        truth_start = frame.timestamp_ns * 1e-9 - start;
+        break;
+      }
+    }
+    std::vector<Segment> segments{{truth_start, truth_start + 0.5 * (length - truth_start)}};
     if (args->Value("map-until")) segments = {{0.0, args->NumberOr("map-until", 0)}};
     if (args->Value("map-segments")) segments = ParseSegments(*args->Value("map-segments"));
     const double tau = args->NumberOr("tau", 0.9), dmax = args->NumberOr("dmax", 0.5);
@@ -254,7 +279,8 @@ int main(int argc, char** argv) {
     const std::vector<KeyframeTruth> keyframes = MapKeyframes(slam, truth);
 
     std::vector<evaluation::RelocalizationTrial> trials;
-    int candidates = 0;
+    std::map<std::string, int> outcomes;
+    int candidates = 0, unmeasured = 0;
     for (std::size_t i = 0; i < sequence.size(); ++i) {
       FrameRow& row = rows[i];
       if (row.mapping || !row.truth) continue;
@@ -280,8 +306,12 @@ int main(int argc, char** argv) {
               (found.result.T_keyframe_camera.translation() - expected.translation()).norm();
           trial.estimated_distance_m = found.result.T_keyframe_camera.translation().norm();
           row.keyframe_position = keyframe_truth->translation();
+        } else {
+          ++unmeasured;  // found against a keyframe mapped before the ground truth begins
         }
       }
+      row.outcome = relocalization::RelocalizationStatusName(found.result.status);
+      ++outcomes[row.outcome];
       row.trial = trial;
       trials.push_back(trial);
       if (!quiet && trials.size() % 100 == 0)
@@ -292,8 +322,8 @@ int main(int argc, char** argv) {
 
     const evaluation::RelocalizationSummary summary =
         evaluation::SummarizeRelocalization(trials, tau, dmax);
-    const std::string json =
-        SummaryJson(args->positional()[0], summary, tau, dmax, keyframes.size(), map_frames);
+    const std::string json = SummaryJson(args->positional()[0], summary, tau, dmax,
+                                         keyframes.size(), map_frames, outcomes, unmeasured);
     if (args->Value("output")) {
       std::filesystem::create_directories(*args->Value("output"));
       WriteOutputs(*args->Value("output"), rows, trials, json);
@@ -313,6 +343,13 @@ int main(int argc, char** argv) {
     std::printf("estimates within 10 cm       %.1f %%\n", 100 * summary.error_below_10cm_fraction);
     std::printf("median error                 %.3f m\n", summary.error_median_m);
     std::printf("wrong (error > dmax)         %d\n", summary.wrong_estimates);
+    if (unmeasured > 0)
+      std::printf(
+          "unmeasured                   %d (found against a keyframe without ground truth)\n",
+          unmeasured);
+    for (const auto& [outcome, count] : outcomes)
+      std::printf("  attempts ending '%s'%*s%d\n", outcome.c_str(),
+                  std::max(1, 24 - static_cast<int>(outcome.size())), "", count);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "evaluate_relocalization: %s\n", error.what());
     return 1;
