@@ -68,11 +68,8 @@ int main(int argc, char** argv) {
   try {
     tools::SlamConfiguration options = tools::SlamConfiguration::Load(
         args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml"));
-    const place_recognition::PlaceRecognitionOptions place_options =
-        place_recognition::LoadPlaceRecognitionOptions(
-            args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
-            options.front_end.features);
-    options.front_end.place_features = place_options.features;
+    const place_recognition::PlaceRecognitionOptions place_options = options.LoadPlaceRecognition(
+        args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"));
     const datasets::EurocSequence sequence = datasets::EurocSequence::Open(args->positional()[0]);
     if (!sequence.has_ground_truth())
       throw std::invalid_argument("the sequence has no ground truth");
@@ -81,10 +78,7 @@ int main(int argc, char** argv) {
     const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
         sequence.ground_truth(), rectifier.T_body_rectified_left());
     pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier, NowMs);
-    slam.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
-                               place_options, options.loop_detection, rectifier.camera(),
-                               slam.descriptor_norm(), slam.max_match_distance()),
-                           options.pose_graph, options.relocalization);
+    options.EnableLoopClosing(place_options, rectifier, &slam);
 
     const double start = sequence.frames().front().timestamp_ns * 1e-9;
     const double map_until = args->NumberOr("map-until", std::numeric_limits<double>::max());

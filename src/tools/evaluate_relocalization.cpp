@@ -222,11 +222,8 @@ int main(int argc, char** argv) {
   try {
     tools::SlamConfiguration options = tools::SlamConfiguration::Load(
         args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml"));
-    const place_recognition::PlaceRecognitionOptions place_options =
-        place_recognition::LoadPlaceRecognitionOptions(
-            args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
-            options.front_end.features);
-    options.front_end.place_features = place_options.features;
+    const place_recognition::PlaceRecognitionOptions place_options = options.LoadPlaceRecognition(
+        args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"));
     const datasets::EurocSequence sequence = datasets::EurocSequence::Open(args->positional()[0]);
     if (sequence.size() == 0) throw std::invalid_argument("the sequence has no stereo frames");
     if (!sequence.has_ground_truth())
@@ -256,10 +253,7 @@ int main(int argc, char** argv) {
 
     pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier,
                               [] { return 0.0; });  // times are not measured here
-    slam.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
-                               place_options, options.loop_detection, rectifier.camera(),
-                               slam.descriptor_norm(), slam.max_match_distance()),
-                           options.pose_graph, options.relocalization);
+    options.EnableLoopClosing(place_options, rectifier, &slam);
     std::vector<FrameRow> rows(sequence.size());
     std::size_t map_frames = 0;
     for (std::size_t i = 0; i < sequence.size(); ++i) {

@@ -200,9 +200,7 @@ int main(int argc, char** argv) {
         args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml");
     std::optional<place_recognition::PlaceRecognitionOptions> place_options;
     if (loop_closing) {
-      place_options =
-          place_recognition::LoadPlaceRecognitionOptions(fabmap_config, options.front_end.features);
-      options.front_end.place_features = place_options->features;
+      place_options = options.LoadPlaceRecognition(fabmap_config);
     }
     const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
     const camera::StereoRectifier rectifier =
@@ -220,10 +218,7 @@ int main(int argc, char** argv) {
 
     pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier, NowMs);
     if (loop_closing) {
-      slam.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
-                                 *place_options, options.loop_detection, rectifier.camera(),
-                                 slam.descriptor_norm(), slam.max_match_distance()),
-                             options.pose_graph, options.relocalization);
+      options.EnableLoopClosing(*place_options, rectifier, &slam);
       if (load_map) slam.LoadMap(*load_map);
       slam.SetMode(mode);
     }

@@ -23,4 +23,21 @@ void SlamConfiguration::Print(std::ostream& out) const {
   copy.ForEachModule([&](auto& options) { io::PrintOptions(options, out); });
 }
 
+place_recognition::PlaceRecognitionOptions SlamConfiguration::LoadPlaceRecognition(
+    const std::string& path) {
+  place_recognition::PlaceRecognitionOptions place =
+      place_recognition::LoadPlaceRecognitionOptions(path, front_end.features);
+  front_end.place_features = place.features;
+  return place;
+}
+
+void SlamConfiguration::EnableLoopClosing(const place_recognition::PlaceRecognitionOptions& place,
+                                          const camera::StereoRectifier& rectifier,
+                                          pipeline::StereoSlam* slam) const {
+  slam->EnableLoopClosing(
+      pipeline::LoopClosing::LoadDetector(place, loop_detection, rectifier.camera(),
+                                          slam->descriptor_norm(), slam->max_match_distance()),
+      pose_graph, relocalization);
+}
+
 }  // namespace stereo_fabmap_slam::tools

@@ -5,7 +5,9 @@
 
 #include "stereo_fabmap_slam/backend/backend_options.h"
 #include "stereo_fabmap_slam/camera/camera_options.h"
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 #include "stereo_fabmap_slam/relocalization/relocalization_options.h"
 
@@ -35,6 +37,15 @@ struct SlamConfiguration {
   // io::InputError naming the file (and line).
   static SlamConfiguration Load(const std::string& path);
   void Print(std::ostream& out) const;
+
+  // Place recognition's options (a fabmap.yaml), and the front end told to make the place
+  // descriptors they describe: what loop closing and relocalization need from every keyframe.
+  place_recognition::PlaceRecognitionOptions LoadPlaceRecognition(const std::string& path);
+  // Loop closing and relocalization on in `slam` (before its first frame), with these options
+  // and FAB-MAP's files as `place` names them.
+  void EnableLoopClosing(const place_recognition::PlaceRecognitionOptions& place,
+                         const camera::StereoRectifier& rectifier,
+                         pipeline::StereoSlam* slam) const;
 };
 
 }  // namespace stereo_fabmap_slam::tools
