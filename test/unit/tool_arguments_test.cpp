@@ -13,19 +13,13 @@ namespace stereo_fabmap_slam::test {
 namespace {
 
 const std::vector<std::string>& Tools() {
-  static const std::vector<std::string> tools = {BENCHMARK_FABMAP_BIN,
-                                                 BENCHMARK_POSE_GRAPH_BIN,
-                                                 BENCHMARK_RELOCALIZATION_BIN,
-                                                 EUROC_TO_BAG_BIN,
-                                                 EVALUATE_DESCRIPTORS_BIN,
-                                                 EVALUATE_PLACE_RECOGNITION_BIN,
-                                                 EVALUATE_PNP_BIN,
-                                                 EVALUATE_RELOCALIZATION_BIN,
-                                                 EVALUATE_TRAJECTORY_BIN,
-                                                 FABMAP_MATCH_BIN,
-                                                 MAKE_SYNTHETIC_SEQUENCE_BIN,
-                                                 RUN_DATASET_BIN,
-                                                 TRAIN_FABMAP_BIN};
+  static const std::vector<std::string> tools = {
+      BENCHMARK_FABMAP_BIN, BENCHMARK_POSE_GRAPH_BIN,    BENCHMARK_RELOCALIZATION_BIN,
+      EUROC_TO_BAG_BIN,     EVALUATE_DESCRIPTORS_BIN,    EVALUATE_PLACE_RECOGNITION_BIN,
+      EVALUATE_PNP_BIN,     EVALUATE_RELOCALIZATION_BIN, EVALUATE_TRAJECTORY_BIN,
+      FABMAP_MATCH_BIN,     MAKE_SYNTHETIC_SEQUENCE_BIN, RUN_DATASET_BIN,
+      TRAIN_FABMAP_BIN,
+  };
   return tools;
 }
 
