@@ -18,6 +18,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "command_line.h"
+#include "fabmap_files.h"
 #include "image_sources.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
@@ -346,16 +347,11 @@ int main(int argc, char** argv) {
         place_recognition::LoadPlaceRecognitionOptions(
             args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
             options.front_end.features);
-    const std::string vocabulary_file =
-        args->ValueOr("vocabulary", place_options.vocabulary_directory + "/vocabulary.bin");
-    const std::string directory = fs::path(vocabulary_file).parent_path().string();
-    if (directory.empty()) throw std::runtime_error("--vocabulary must name a file in a folder");
-    const place_recognition::Vocabulary vocabulary =
-        place_recognition::Vocabulary::Load(vocabulary_file);
-    const place_recognition::ChowLiuTree tree =
-        place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin");
-    const place_recognition::PlaceDatabase training =
-        place_recognition::PlaceDatabase::Load(directory + "/training_places.bin");
+    const tools::FabMapFiles files = tools::LoadFabMapFiles(
+        args->ValueOr("vocabulary", place_options.vocabulary_directory + "/vocabulary.bin"));
+    const place_recognition::Vocabulary& vocabulary = files.vocabulary;
+    const place_recognition::ChowLiuTree& tree = files.tree;
+    const place_recognition::PlaceDatabase& training = files.training_places;
 
     const std::string source = args->positional()[0];
     const double start = NowSeconds();

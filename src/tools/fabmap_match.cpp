@@ -6,11 +6,13 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "command_line.h"
+#include "fabmap_files.h"
 #include "image_sources.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/io/options_file.h"
@@ -60,18 +62,14 @@ int main(int argc, char** argv) {
             io::OptionsFile::Load(
                 args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml"))
                 .Read<features::FeatureOptions>());
-    const std::string vocabulary_file =
-        args->ValueOr("vocabulary", options.vocabulary_directory + "/vocabulary.bin");
-    const std::string directory = fs::path(vocabulary_file).parent_path().string();
-    if (directory.empty()) throw std::runtime_error("--vocabulary must name a file in a folder");
-    const place_recognition::Vocabulary vocabulary =
-        place_recognition::Vocabulary::Load(vocabulary_file);
+    tools::FabMapFiles files = tools::LoadFabMapFiles(
+        args->ValueOr("vocabulary", options.vocabulary_directory + "/vocabulary.bin"));
+    const place_recognition::Vocabulary& vocabulary = files.vocabulary;
     place_recognition::FabMapOptions fabmap_options = options.fabmap;
     if (args->Flag("sampling"))
       fabmap_options.new_place_model = place_recognition::NewPlaceModel::kSampling;
-    place_recognition::FabMap fabmap(
-        place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), fabmap_options,
-        place_recognition::PlaceDatabase::Load(directory + "/training_places.bin"));
+    place_recognition::FabMap fabmap(std::move(files.tree), fabmap_options,
+                                     std::move(files.training_places));
     place_recognition::ImageDescriber describer(options.features);
     // Listed first: a source without images is an error, without a CSV header on stdout.
     const std::vector<tools::ImageSource> images = tools::ListImages(args->positional()[0], every);
