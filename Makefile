@@ -64,14 +64,14 @@ $(WS)/build/Makefile:
 # Later builds re-run CMake by themselves when a CMakeLists.txt or package.xml changes.
 build: deps $(WS)/build/Makefile
 	$(CMAKE_BUILD) -j$(JOBS)
-	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/vocabulary.bin
+	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/detector_model.yaml
 
 # The default FAB-MAP vocabulary (config/fabmap.yaml points at it), trained once from images
 # every fresh machine has: opencv-doc's photos and a rendered sequence of the synthetic hall.
 # Never from ../shared/data. `make vocabulary` trains it again.
 FABMAP_DEFAULT := build/fabmap/default
-$(FABMAP_DEFAULT)/vocabulary.bin:
-	@echo "Training the default FAB-MAP vocabulary (first build only, about a minute)"
+$(FABMAP_DEFAULT)/detector_model.yaml:
+	@echo "Training the default FAB-MAP vocabulary and detector model (first build only, under a minute)"
 	rm -rf build/fabmap/synthetic
 	$(BIN)/make_synthetic_sequence --output build/fabmap/synthetic --route figure8 --seconds 20 --seed 7 --no-bag > /dev/null
 	$(BIN)/train_fabmap --output $(FABMAP_DEFAULT) --spacing 5 /usr/share/doc/opencv-doc/examples/data build/fabmap/synthetic
@@ -80,7 +80,7 @@ $(FABMAP_DEFAULT)/vocabulary.bin:
 vocabulary: deps $(WS)/build/Makefile
 	$(CMAKE_BUILD) -j$(JOBS)
 	rm -rf $(FABMAP_DEFAULT)
-	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/vocabulary.bin
+	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/detector_model.yaml
 
 # Builds the test programs in parallel, then runs them one at a time (each rostest starts its
 # own master); then the sanitizer build's unit tests (ASan, LSan, UBSan), two at a time; and

@@ -72,7 +72,7 @@ std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& fra
       result.new_place_probability = restricted.new_place;
       if (restricted.best >= 0) {
         result.best_place = restricted.best;
-        result.score = restricted.posterior[static_cast<std::size_t>(restricted.best)];
+        result.score = restricted.best_log_odds;
         for (const int frame : members[static_cast<std::size_t>(restricted.best)]) {
           if (!frames.IsCandidate(frame, j)) break;
           result.best_frame = frame;

@@ -7,6 +7,7 @@
 #include "stereo_fabmap_slam/io/input_error.h"
 
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
+#include "stereo_fabmap_slam/place_recognition/detector_model.h"
 #include "stereo_fabmap_slam/place_recognition/place_database.h"
 
 namespace stereo_fabmap_slam::pipeline {
@@ -28,7 +29,8 @@ place_recognition::LoopDetector LoopClosing::LoadDetector(
     training_places = place_recognition::PlaceDatabase::Load(directory + "/training_places.bin");
   }
   place_recognition::FabMap fabmap(
-      place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin"), options.fabmap,
+      place_recognition::ChowLiuTree::Load(directory + "/chow_liu_tree.bin"),
+      place_recognition::ResolveDetectorModel(options.fabmap, directory),
       std::move(training_places));
   return place_recognition::LoopDetector(
       detector_options, place_recognition::Vocabulary::Load(directory + "/vocabulary.bin"),

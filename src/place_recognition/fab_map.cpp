@@ -292,6 +292,9 @@ FabMapResult FabMap::Compare(const std::vector<int>& words) const {
     for (double& l : log_joint) l += log_uniform;
   }
   log_joint.push_back(result.new_place_log_likelihood + std::log(options_.new_place_prior));
+  result.best = static_cast<int>(std::max_element(log_joint.begin(), log_joint.end() - 1) -
+                                 log_joint.begin());
+  result.best_log_odds = log_joint[static_cast<std::size_t>(result.best)] - log_joint.back();
   // Normalise, with one exponential per place: p_i = exp(l_i - top) / sum_j exp(l_j - top).
   // log_joint becomes the unnormalised joint exp(l_i - top).
   const double top = *std::max_element(log_joint.begin(), log_joint.end());
@@ -305,9 +308,6 @@ FabMapResult FabMap::Compare(const std::vector<int>& words) const {
   result.posterior.resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) result.posterior[i] = scale * log_joint[i] + uniform;
   result.new_place = scale * log_joint.back() + uniform;
-  result.best =
-      static_cast<int>(std::max_element(result.posterior.begin(), result.posterior.end()) -
-                       result.posterior.begin());
   return result;
 }
 
@@ -331,27 +331,26 @@ FabMapResult FabMap::Compare(const std::vector<int>& words,
   const double log_uniform = std::log((1 - options_.new_place_prior) / n);
   const double log_new = result.new_place_log_likelihood + std::log(options_.new_place_prior);
   double top = log_new;
+  std::vector<double> log_joint(static_cast<std::size_t>(places));
   for (int i = 0; i < places; ++i) {
-    if (candidates[i]) top = std::max(top, result.log_likelihoods[i] + log_uniform);
+    log_joint[i] = result.log_likelihoods[i] + log_uniform;
+    if (candidates[i] && (result.best < 0 || log_joint[i] > log_joint[result.best]))
+      result.best = i;
+    if (candidates[i]) top = std::max(top, log_joint[i]);
   }
+  result.best_log_odds = log_joint[static_cast<std::size_t>(result.best)] - log_new;
   double sum = 0;
   for (int i = 0; i < places; ++i) {
     if (!candidates[i]) continue;
-    result.posterior[i] = std::exp(result.log_likelihoods[i] + log_uniform - top);
+    result.posterior[i] = std::exp(log_joint[i] - top);
     sum += result.posterior[i];
   }
   const double new_joint = std::exp(log_new - top);
   sum += new_joint;
   const double uniform = (1 - options_.smoothing) / (n + 1);
   const double scale = options_.smoothing / sum;
-  double best = -1;
   for (int i = 0; i < places; ++i) {
-    if (!candidates[i]) continue;
-    result.posterior[i] = scale * result.posterior[i] + uniform;
-    if (result.posterior[i] > best) {
-      best = result.posterior[i];
-      result.best = i;
-    }
+    if (candidates[i]) result.posterior[i] = scale * result.posterior[i] + uniform;
   }
   result.new_place = scale * new_joint + uniform;
   return result;

@@ -25,6 +25,9 @@ void VocabularyOptions::Validate() const {
 }
 
 void FabMapOptions::Visit(io::OptionVisitor& visitor) {
+  static constexpr io::EnumName<DetectorModelSource> kDetectorModels[] = {
+      {DetectorModelSource::kTrained, "trained"}, {DetectorModelSource::kFixed, "fixed"}};
+  io::VisitEnum(visitor, "detector_model", &detector_model, kDetectorModels);
   visitor.Visit("p_z_given_e", &p_z_given_e);
   visitor.Visit("p_z_given_not_e", &p_z_given_not_e);
   visitor.Visit("new_place_prior", &new_place_prior);

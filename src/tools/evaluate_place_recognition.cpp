@@ -29,6 +29,7 @@
 #include "stereo_fabmap_slam/evaluation/pose_interpolation.h"
 #include "stereo_fabmap_slam/evaluation/trajectory.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
+#include "stereo_fabmap_slam/place_recognition/detector_model.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -343,12 +344,16 @@ int main(int argc, char** argv) {
   try {
     const tools::SlamConfiguration options = tools::SlamConfiguration::Load(
         args->ValueOr("config", STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml"));
-    const place_recognition::PlaceRecognitionOptions place_options =
+    place_recognition::PlaceRecognitionOptions place_options =
         place_recognition::LoadPlaceRecognitionOptions(
             args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
             options.front_end.features);
     const tools::FabMapFiles files = tools::LoadFabMapFiles(
         args->ValueOr("vocabulary", place_options.vocabulary_directory + "/vocabulary.bin"));
+    place_options.fabmap =
+        place_recognition::ResolveDetectorModel(place_options.fabmap, files.directory);
+    std::fprintf(stderr, "detector model: p(z|e) %.3f, p(z|not e) %.4f\n",
+                 place_options.fabmap.p_z_given_e, place_options.fabmap.p_z_given_not_e);
     const place_recognition::Vocabulary& vocabulary = files.vocabulary;
     const place_recognition::ChowLiuTree& tree = files.tree;
     const place_recognition::PlaceDatabase& training = files.training_places;

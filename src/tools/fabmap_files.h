@@ -9,8 +9,10 @@
 namespace stereo_fabmap_slam::tools {
 
 // What train_fabmap writes into one folder: the vocabulary, the Chow-Liu tree over its words
-// and the training places (the sampled new-place model, tf-idf's document frequencies).
+// and the training places (the sampled new-place model, tf-idf's document frequencies); the
+// detector model beside them is read by place_recognition::ResolveDetectorModel.
 struct FabMapFiles {
+  std::string directory;  // for place_recognition::ResolveDetectorModel
   place_recognition::Vocabulary vocabulary;
   place_recognition::ChowLiuTree tree;
   place_recognition::PlaceDatabase training_places;

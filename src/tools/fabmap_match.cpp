@@ -16,6 +16,7 @@
 #include "image_sources.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/io/options_file.h"
+#include "stereo_fabmap_slam/place_recognition/detector_model.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -65,7 +66,8 @@ int main(int argc, char** argv) {
     tools::FabMapFiles files = tools::LoadFabMapFiles(
         args->ValueOr("vocabulary", options.vocabulary_directory + "/vocabulary.bin"));
     const place_recognition::Vocabulary& vocabulary = files.vocabulary;
-    place_recognition::FabMapOptions fabmap_options = options.fabmap;
+    place_recognition::FabMapOptions fabmap_options =
+        place_recognition::ResolveDetectorModel(options.fabmap, files.directory);
     if (args->Flag("sampling"))
       fabmap_options.new_place_model = place_recognition::NewPlaceModel::kSampling;
     place_recognition::FabMap fabmap(std::move(files.tree), fabmap_options,

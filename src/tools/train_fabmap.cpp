@@ -16,6 +16,7 @@
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/io/options_file.h"
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
+#include "stereo_fabmap_slam/place_recognition/detector_model.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 #include "stereo_fabmap_slam/place_recognition/place_database.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -34,7 +35,12 @@ constexpr char kUsage[] =
     "Features: the detector and descriptor of --config (default config/euroc.yaml) with the\n"
     "selection, vocabulary size and spacing of --fabmap-config (default config/fabmap.yaml);\n"
     "the flags override the latter. Writes DIR/vocabulary.bin (branching^depth words at most),\n"
-    "DIR/chow_liu_tree.bin and DIR/training_places.bin.\n";
+    "DIR/chow_liu_tree.bin, DIR/training_places.bin and DIR/detector_model.yaml (p(z|e) and\n"
+    "p(z|not e) estimated from neighbouring views of the sequences: at least one is needed).\n";
+
+bool IsSequence(const std::string& source) {
+  return fs::is_directory(source + "/mav0") || fs::is_directory(source + "/cam0");
+}
 
 }  // namespace
 
@@ -70,10 +76,17 @@ int main(int argc, char** argv) {
     if (spacing < 1) throw std::runtime_error("--spacing must be >= 1");
     vocabulary_options.Validate();
     std::vector<std::string> images;
+    // Per source that is a sequence: the indices of its images, in order. Neighbours (`spacing`
+    // frames apart, a keyframe's distance) show one place: the detector model's evidence.
+    std::vector<std::vector<std::size_t>> sequences;
     for (const std::string& source : args->positional()) {
       const std::vector<tools::ImageSource> found = tools::ListImages(source, spacing);
       std::printf("%s: %zu training images\n", source.c_str(), found.size());
-      for (const tools::ImageSource& image : found) images.push_back(image.path);
+      if (IsSequence(source)) sequences.emplace_back();
+      for (const tools::ImageSource& image : found) {
+        if (IsSequence(source)) sequences.back().push_back(images.size());
+        images.push_back(image.path);
+      }
     }
     if (images.size() < 2) throw std::runtime_error("need at least two training images");
 
@@ -106,8 +119,20 @@ int main(int argc, char** argv) {
                  vocabulary.size(), word_sets.size());
     const place_recognition::ChowLiuTree tree =
         place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size());
+    std::vector<std::vector<std::vector<int>>> sequence_views;
+    for (const std::vector<std::size_t>& sequence : sequences) {
+      sequence_views.emplace_back();
+      for (const std::size_t i : sequence) sequence_views.back().push_back(word_sets[i]);
+    }
+    const place_recognition::DetectorModel detector =
+        place_recognition::EstimateDetectorModel(sequence_views, vocabulary.size());
+    std::printf(
+        "detector model from %d triples of neighbouring views: p(z|e) %.3f, "
+        "p(z|not e) %.5f\n",
+        detector.triples, detector.p_z_given_e, detector.p_z_given_not_e);
     fs::create_directories(output);
     vocabulary.Save(output + "/vocabulary.bin");
+    place_recognition::SaveDetectorModel(detector, output + "/detector_model.yaml");
     tree.Save(output + "/chow_liu_tree.bin");
     training_places.Save(output + "/training_places.bin");
     std::printf("wrote %s: %d words, Chow-Liu tree from %zu images\n", output.c_str(),

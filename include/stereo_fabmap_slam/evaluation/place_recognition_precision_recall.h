@@ -12,7 +12,7 @@ struct PlaceQueryResult {
   bool has_true_match = false;  // ...and ground truth says one of them shows the same place
   int best_place = -1;          // the best candidate: a FAB-MAP place or an image; -1: none
   int best_frame = -1;          // a frame of that place (see PlaceRecognitionQueries)
-  double score = 0;             // FAB-MAP posterior or tf-idf cosine of best_place
+  double score = 0;  // FAB-MAP log odds of best_place (FabMapResult), or its tf-idf cosine
   double new_place_probability = std::numeric_limits<double>::quiet_NaN();  // FAB-MAP only
   // FAB-MAP over the whole map, recent frames included: no place reached the match threshold,
   // so FabMap::Add would make the view a new place. False for methods without the notion.

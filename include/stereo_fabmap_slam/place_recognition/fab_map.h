@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -40,9 +41,18 @@ class FabMapModel {
 };
 
 struct FabMapResult {
-  std::vector<double> posterior;        // per place in the map
-  double new_place = 1.0;               // probability that the view shows a new place
-  int best = -1;                        // place with the highest posterior, -1 if the map is empty
+  std::vector<double> posterior;  // per place in the map
+  double new_place = 1.0;         // probability that the view shows a new place
+  int best = -1;                  // place with the highest posterior, -1 if the map is empty
+  // log(p(best | Z) / p(new place | Z)) before smoothing: how much likelier the view shows the
+  // best place than a place not in the map. The smoothed posterior saturates: log-likelihoods
+  // differ by tens of nats, so most confident answers read 0.99 + 0.01 / (places + 1) and their
+  // order follows the map's size, not the evidence. Nor is the best weighed against the other
+  // places: consecutive keyframes of one location share its posterior, and a true revisit would
+  // look unsure exactly where the map is dense. Against the new place, each place stands on its
+  // own evidence; perceptual aliasing is the new-place model's to explain (common words are
+  // likely anywhere). The thresholds of loop detection and the evaluation's ranking use this.
+  double best_log_odds = -std::numeric_limits<double>::infinity();
   std::vector<double> log_likelihoods;  // log p(Z | place)
   double new_place_log_likelihood = 0;  // log p(Z | new place)
 };

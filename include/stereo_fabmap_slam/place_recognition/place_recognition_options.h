@@ -22,14 +22,24 @@ struct VocabularyOptions {
 
 // p(Z | new place): the mean-field approximation, or an average over sampled training places.
 enum class NewPlaceModel { kMeanField, kSampling };
+// Where the detector model comes from: estimated by train_fabmap from its training sequences
+// (detector_model.yaml beside the vocabulary), or the two fixed values of the options.
+enum class DetectorModelSource { kTrained, kFixed };
 // The prior over places: uniform, or favouring the neighbours of the last match.
 enum class LocationPrior { kUniform, kMotion };
 
 struct FabMapOptions {
   static constexpr char kSection[] = "fabmap";
 
-  double p_z_given_e = 0.39;     // detector model: p(word seen | scene element present)
-  double p_z_given_not_e = 0.0;  // p(word seen | element absent): false detections
+  // trained: p(z|e) and p(z|not e) from the vocabulary's detector_model.yaml, what its training
+  // views showed (ResolveDetectorModel fills the two fields below); fixed: the two fields.
+  DetectorModelSource detector_model = DetectorModelSource::kTrained;
+  double p_z_given_e = 0.39;  // detector model: p(word seen | scene element present)
+  // p(word seen | element absent): false detections. Never 0: a place seen n times without a
+  // word would then rule it out for good (its p(e) falls as 1.6^-n), and one noisy detection in
+  // an unchanged view made a hovering camera's place a new one. Cummins & Newman's 0 assumed
+  // a detector without false positives; quantised corners have them.
+  double p_z_given_not_e = 0.005;
   double new_place_prior = 0.9;  // prior that a view shows a place not in the map
   double smoothing = 0.99;       // posterior smoothing: p -> s p + (1 - s) / (places + 1)
   NewPlaceModel new_place_model = NewPlaceModel::kMeanField;  // mean_field, or sampling
