@@ -47,6 +47,22 @@ double AreaUnderCurve(const std::vector<PlacePrecisionRecallPoint>& curve) {
   return area;
 }
 
+PlacePrecisionRecallPoint PointAtThreshold(const std::vector<PlaceQueryResult>& results,
+                                           double threshold) {
+  PlacePrecisionRecallPoint point;
+  point.threshold = threshold;
+  int with_true_match = 0;
+  for (const PlaceQueryResult& result : results) {
+    with_true_match += result.has_true_match ? 1 : 0;
+    if (result.best_place < 0 || !(result.score >= threshold)) continue;
+    ++point.declared;
+    point.correct += result.is_true ? 1 : 0;
+  }
+  point.precision = point.declared > 0 ? static_cast<double>(point.correct) / point.declared : 1.0;
+  point.recall = with_true_match > 0 ? static_cast<double>(point.correct) / with_true_match : 0.0;
+  return point;
+}
+
 PlaceRecognitionSummary SummarizePlaceRecognition(const std::vector<PlaceQueryResult>& results) {
   PlaceRecognitionSummary summary;
   for (const PlaceQueryResult& result : results) {

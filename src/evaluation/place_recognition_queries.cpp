@@ -53,7 +53,7 @@ ExcludedPairs CountExcludedPairs(const PlaceRecognitionFrames& frames,
 
 std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& frames,
                                                const PlaceGroundTruth& truth, PlacesMode mode,
-                                               double match_threshold,
+                                               double match_log_odds,
                                                place_recognition::FabMap* fabmap,
                                                const QueryProgress& progress) {
   CheckSizes(frames, truth);
@@ -92,7 +92,7 @@ std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& fra
     } else {
       if (!members.empty()) {
         const place_recognition::FabMapResult full = fabmap->Compare(words);
-        result.declared_new = full.posterior[static_cast<std::size_t>(full.best)] < match_threshold;
+        result.declared_new = full.best_log_odds < match_log_odds;
       } else {
         result.declared_new = true;
       }

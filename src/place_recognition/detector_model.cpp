@@ -42,10 +42,7 @@ void DetectorModel::Visit(io::OptionVisitor& visitor) {
 }
 
 void DetectorModel::Validate() const {
-  if (!(p_z_given_e > 0 && p_z_given_e < 1) ||
-      !(p_z_given_not_e >= 0 && p_z_given_not_e < p_z_given_e)) {
-    throw std::invalid_argument("detector model: need 0 <= p_z_given_not_e < p_z_given_e < 1");
-  }
+  ValidateDetectorRates(p_z_given_e, p_z_given_not_e, "detector model");
 }
 
 DetectorModel EstimateDetectorModel(const std::vector<std::vector<std::vector<int>>>& sequences,

@@ -365,8 +365,7 @@ int FabMap::AddPlace(const std::vector<int>& words) {
 FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
   FabMapResult result = Compare(words);
   int index;
-  if (result.best >= 0 &&
-      result.posterior[static_cast<std::size_t>(result.best)] >= options_.match_threshold) {
+  if (result.best >= 0 && result.best_log_odds >= options_.match_log_odds) {
     index = result.best;
     places_.database.UpdatePlace(index, words);
     places_.hit_sums[static_cast<std::size_t>(index)] = HitSum(places_.database.place(index));

@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "stereo_fabmap_slam/io/input_error.h"
@@ -41,22 +42,26 @@ void FabMapOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("motion_weight", &motion_weight);
   visitor.Visit("inverted_index", &inverted_index);
   visitor.Visit("exact_tree_corrections", &exact_tree_corrections);
-  visitor.Visit("match_threshold", &match_threshold);
+  visitor.Visit("match_log_odds", &match_log_odds);
+}
+
+void ValidateDetectorRates(double p_z_given_e, double p_z_given_not_e, const std::string& what) {
+  if (!(p_z_given_e > 0 && p_z_given_e < 1) ||
+      !(p_z_given_not_e >= 0 && p_z_given_not_e < p_z_given_e)) {
+    throw std::invalid_argument(what + ": need 0 <= p_z_given_not_e < p_z_given_e < 1");
+  }
 }
 
 void FabMapOptions::Validate() const {
-  if (!(p_z_given_e > 0 && p_z_given_e < 1) ||
-      !(p_z_given_not_e >= 0 && p_z_given_not_e < p_z_given_e)) {
-    throw std::invalid_argument("fabmap: need 0 <= p_z_given_not_e < p_z_given_e < 1");
-  }
+  ValidateDetectorRates(p_z_given_e, p_z_given_not_e, "fabmap");
   if (!(new_place_prior > 0 && new_place_prior < 1))
     throw std::invalid_argument("fabmap.new_place_prior must lie in (0, 1)");
   if (!(smoothing > 0 && smoothing <= 1))
     throw std::invalid_argument("fabmap.smoothing must lie in (0, 1]");
   if (!(motion_weight >= 0 && motion_weight <= 1))
     throw std::invalid_argument("fabmap.motion_weight must lie in [0, 1]");
-  if (!(match_threshold > 0 && match_threshold <= 1))
-    throw std::invalid_argument("fabmap.match_threshold must lie in (0, 1]");
+  if (!std::isfinite(match_log_odds))
+    throw std::invalid_argument("fabmap.match_log_odds must be a finite number");
 }
 
 void LoopDetectorOptions::Visit(io::OptionVisitor& visitor) {

@@ -68,6 +68,8 @@ constexpr char kUsage[] =
     "  --output DIR       place_recognition_pr.csv (method,mode,threshold,precision,recall,\n"
     "                     declared,correct), place_recognition_summary.csv, and\n"
     "                     place_recognition_queries.csv (one row per method, mode and query)\n"
+    "FAB-MAP's answers are ranked by their log odds against a new place; precision and recall\n"
+    "at fabmap.match_log_odds (the default threshold, 0) are reported beside the curve.\n"
     "  --json             print one summary object instead of the table\n";
 
 double NowSeconds() {
@@ -207,8 +209,14 @@ struct Run {
   std::vector<evaluation::PlaceQueryResult> results;
   std::vector<evaluation::PlacePrecisionRecallPoint> curve;
   evaluation::PlaceRecognitionSummary summary;
+  // FAB-MAP: matches declared at the configured fabmap.match_log_odds; tf-idf has no default.
+  std::optional<evaluation::PlacePrecisionRecallPoint> at_default;
   double seconds = 0;
 };
+
+std::string AtDefault(const Run& run, double evaluation::PlacePrecisionRecallPoint::*field) {
+  return run.at_default ? Number((*run.at_default).*field) : "";
+}
 
 void WriteText(const std::string& path, const std::string& text) {
   std::ofstream file(path);
@@ -222,7 +230,8 @@ void WriteOutputs(const std::string& directory, const Input& input,
   std::string pr = "method,mode,threshold,precision,recall,declared,correct\n";
   std::string summary =
       "method,mode,queries,queries_with_true_match,excluded_pairs,excluded_same_place_pairs,"
-      "recall_at_100_precision,auc,declared_new_places,seconds\n";
+      "recall_at_100_precision,auc,declared_new_places,seconds,default_threshold,"
+      "precision_at_default,recall_at_default\n";
   std::string queries =
       "method,mode,query,image,time,best_place,best_frame,best_image,score,"
       "new_place_probability,declared_new,has_true_match,is_true\n";
@@ -238,7 +247,10 @@ void WriteOutputs(const std::string& directory, const Input& input,
                std::to_string(excluded.pairs) + "," + std::to_string(excluded.same_place) + "," +
                Number(run.summary.recall_at_full_precision) + "," + Number(run.summary.auc) + "," +
                (run.method == "fabmap" ? std::to_string(run.summary.declared_new) : "") + "," +
-               Number(run.seconds) + "\n";
+               Number(run.seconds) + "," +
+               AtDefault(run, &evaluation::PlacePrecisionRecallPoint::threshold) + "," +
+               AtDefault(run, &evaluation::PlacePrecisionRecallPoint::precision) + "," +
+               AtDefault(run, &evaluation::PlacePrecisionRecallPoint::recall) + "\n";
     for (const evaluation::PlaceQueryResult& result : run.results) {
       const std::size_t q = static_cast<std::size_t>(result.query);
       queries +=
@@ -275,6 +287,11 @@ std::string SummaryJson(const std::string& source, const Input& input,
         ", \"auc\": " + Number(run.summary.auc);
     if (run.method == "fabmap")
       json += ", \"declared_new_places\": " + std::to_string(run.summary.declared_new);
+    if (run.at_default) {
+      json += ", \"default_threshold\": " + Number(run.at_default->threshold) +
+              ", \"precision_at_default\": " + Number(run.at_default->precision) +
+              ", \"recall_at_default\": " + Number(run.at_default->recall);
+    }
     json += "}";
   }
   return json + "]}\n";
@@ -285,14 +302,19 @@ void PrintTable(const Input& input, const evaluation::ExcludedPairs& excluded,
   std::printf("%d frames; window %s %s: %ld pairs excluded (%ld of them the same place)\n",
               input.frames.size(), Number(input.frames.window).c_str(), input.window_unit.c_str(),
               excluded.pairs, excluded.same_place);
-  std::printf("%-8s %-10s %8s %11s %11s %8s %10s %8s\n", "method", "mode", "queries", "true_match",
-              "recall@P1", "AUC", "new_places", "time_s");
+  std::printf("%-8s %-10s %8s %11s %11s %8s %10s %8s %13s\n", "method", "mode", "queries",
+              "true_match", "recall@P1", "AUC", "new_places", "time_s", "P/R@default");
   for (const Run& run : runs) {
-    std::printf("%-8s %-10s %8d %11d %10.1f%% %8.3f %10s %8.2f\n", run.method.c_str(),
+    char at_default[32] = "-";
+    if (run.at_default) {
+      std::snprintf(at_default, sizeof(at_default), "%.1f/%.1f%%",
+                    100.0 * run.at_default->precision, 100.0 * run.at_default->recall);
+    }
+    std::printf("%-8s %-10s %8d %11d %10.1f%% %8.3f %10s %8.2f %13s\n", run.method.c_str(),
                 run.mode.c_str(), run.summary.queries, run.summary.queries_with_true_match,
                 100.0 * run.summary.recall_at_full_precision, run.summary.auc,
                 run.method == "fabmap" ? std::to_string(run.summary.declared_new).c_str() : "-",
-                run.seconds);
+                run.seconds, at_default);
   }
 }
 
@@ -371,11 +393,11 @@ int main(int argc, char** argv) {
 
     std::vector<Run> runs;
     for (const evaluation::PlacesMode mode : modes) {
-      Run run{"fabmap", evaluation::PlacesModeName(mode), {}, {}, {}, 0};
+      Run run{"fabmap", evaluation::PlacesModeName(mode), {}, {}, {}, {}, 0};
       const double run_start = NowSeconds();
       place_recognition::FabMap fabmap(tree, place_options.fabmap, training);
       run.results = evaluation::RunFabMapQueries(
-          input.frames, *input.truth, mode, place_options.fabmap.match_threshold, &fabmap,
+          input.frames, *input.truth, mode, place_options.fabmap.match_log_odds, &fabmap,
           [&](int done, int total) {
             if (done % 500 == 0 || done == total)
               std::fprintf(stderr, "FAB-MAP (%s): %d / %d queries\n", run.mode.c_str(), done,
@@ -386,7 +408,7 @@ int main(int argc, char** argv) {
     }
     {
       // tf-idf has no places to update: one image each, under both modes' queries.
-      Run run{"tfidf", "per-image", {}, {}, {}, 0};
+      Run run{"tfidf", "per-image", {}, {}, {}, {}, 0};
       const double run_start = NowSeconds();
       std::vector<std::vector<int>> training_words;
       for (int i = 0; i < training.size(); ++i) {
@@ -402,6 +424,10 @@ int main(int argc, char** argv) {
     for (Run& run : runs) {
       run.curve = evaluation::PrecisionRecallCurve(run.results);
       run.summary = evaluation::SummarizePlaceRecognition(run.results);
+      if (run.method == "fabmap") {
+        run.at_default =
+            evaluation::PointAtThreshold(run.results, place_options.fabmap.match_log_odds);
+      }
     }
     if (args->Value("output")) {
       WriteOutputs(*args->Value("output"), input, excluded, runs);

@@ -476,15 +476,18 @@ class RealImages : public ::testing::Test {
       FAIL() << "no default vocabulary in " << directory << ": `make build` trains it";
     }
   }
+  // The shipped configuration: odometry features with place recognition's selection.
+  static PlaceRecognitionOptions ShippedOptions() {
+    return LoadPlaceRecognitionOptions(
+        RepositoryRoot() + "/config/fabmap.yaml",
+        io::OptionsFile::Load(RepositoryRoot() + "/config/euroc.yaml")
+            .Read<features::FeatureOptions>());
+  }
 };
 
 TEST_F(RealImages, KnownPlacesMatchAndAnotherBuildingIsNew) {
   const std::string directory = STEREO_FABMAP_SLAM_DEFAULT_VOCABULARY;
-  // The shipped configuration: odometry features with place recognition's selection.
-  const PlaceRecognitionOptions options =
-      LoadPlaceRecognitionOptions(RepositoryRoot() + "/config/fabmap.yaml",
-                                  io::OptionsFile::Load(RepositoryRoot() + "/config/euroc.yaml")
-                                      .Read<features::FeatureOptions>());
+  const PlaceRecognitionOptions options = ShippedOptions();
   EXPECT_EQ(std::filesystem::canonical(options.vocabulary_directory),
             std::filesystem::canonical(directory));
   const Vocabulary vocabulary = Vocabulary::Load(directory + "/vocabulary.bin");
@@ -527,10 +530,7 @@ TEST_F(RealImages, ACameraStandingStillStaysOnePlace) {
   // and words come and go. FabMap::Add with the shipped configuration must update the first
   // place every time.
   const std::string directory = STEREO_FABMAP_SLAM_DEFAULT_VOCABULARY;
-  const PlaceRecognitionOptions options =
-      LoadPlaceRecognitionOptions(RepositoryRoot() + "/config/fabmap.yaml",
-                                  io::OptionsFile::Load(RepositoryRoot() + "/config/euroc.yaml")
-                                      .Read<features::FeatureOptions>());
+  const PlaceRecognitionOptions options = ShippedOptions();
   const Vocabulary vocabulary = Vocabulary::Load(directory + "/vocabulary.bin");
   const ChowLiuTree tree = ChowLiuTree::Load(directory + "/chow_liu_tree.bin");
   ImageDescriber describer{options.features};

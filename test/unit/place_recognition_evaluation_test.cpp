@@ -74,6 +74,18 @@ TEST(PlaceRecognitionPrecisionRecall, HandBuiltCurve) {
   EXPECT_EQ(summary.queries_with_true_match, 5);
   EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 0.4);
   EXPECT_DOUBLE_EQ(summary.auc, 0.55);
+
+  // A fixed threshold between the sweep's points: 0.75 declares 0.9 and 0.8, both right.
+  const evaluation::PlacePrecisionRecallPoint at = evaluation::PointAtThreshold(results, 0.75);
+  EXPECT_EQ(at.declared, 2);
+  EXPECT_EQ(at.correct, 2);
+  EXPECT_DOUBLE_EQ(at.precision, 1.0);
+  EXPECT_DOUBLE_EQ(at.recall, 0.4);
+  const evaluation::PlacePrecisionRecallPoint low = evaluation::PointAtThreshold(results, 0.55);
+  EXPECT_EQ(low.declared, 4);
+  EXPECT_DOUBLE_EQ(low.precision, 0.75);
+  EXPECT_EQ(evaluation::PointAtThreshold(results, 2.0).declared, 0);
+  EXPECT_DOUBLE_EQ(evaluation::PointAtThreshold(results, 2.0).precision, 1.0);
 }
 
 TEST(PlaceRecognitionPrecisionRecall, TiedScoresAreDeclaredTogether) {
@@ -269,7 +281,7 @@ TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
     place_recognition::FabMapOptions options;
     place_recognition::FabMap fabmap(tree, options);
     const std::vector<PlaceQueryResult> results =
-        evaluation::RunFabMapQueries(passes.frames, truth, mode, options.match_threshold, &fabmap);
+        evaluation::RunFabMapQueries(passes.frames, truth, mode, options.match_log_odds, &fabmap);
     ASSERT_EQ(results.size(), 20u);
     for (int j = 0; j < 20; ++j) {
       const PlaceQueryResult& result = results[static_cast<std::size_t>(j)];

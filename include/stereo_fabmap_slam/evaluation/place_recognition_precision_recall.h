@@ -37,6 +37,11 @@ std::vector<PlacePrecisionRecallPoint> PrecisionRecallCurve(
 // The highest recall of any point without a false match; 0 if even the top score is wrong.
 double RecallAtFullPrecision(const std::vector<PlacePrecisionRecallPoint>& curve);
 
+// Declaring a match wherever the score reaches `threshold`: how many, how many right, precision
+// (1 when nothing is declared: no false match) and recall.
+PlacePrecisionRecallPoint PointAtThreshold(const std::vector<PlaceQueryResult>& results,
+                                           double threshold);
+
 // Area under the precision-recall curve as the step function the sweep traces (average
 // precision: sum of precision x recall gained at each threshold; no interpolation, which would
 // credit a method with precision it never reaches at that recall).

@@ -27,7 +27,7 @@ struct PlaceRecognitionFrames {
 
 // FAB-MAP's places: one per image (every image becomes a place of its own, as the SLAM map keeps
 // one per keyframe), or updated on revisits (FabMap::Add: the best place takes the view when
-// its posterior reaches match_threshold, otherwise the view becomes a new place).
+// its log odds reach match_log_odds, otherwise the view becomes a new place).
 enum class PlacesMode { kPerImage, kUpdate };
 const char* PlacesModeName(PlacesMode mode);  // "per-image", "update"
 
@@ -51,7 +51,7 @@ using QueryProgress = std::function<void(int done, int total)>;
 // if the frames and the ground truth differ in size.
 std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& frames,
                                                const PlaceGroundTruth& truth, PlacesMode mode,
-                                               double match_threshold,
+                                               double match_log_odds,
                                                place_recognition::FabMap* fabmap,
                                                const QueryProgress& progress = nullptr);
 

@@ -76,7 +76,7 @@ class FabMap {
   // motion prior follows Add's sequence, which a subset breaks). Loop detection leaves out the
   // recent past; relocalization leaves out the piece of map it is lost in.
   FabMapResult Compare(const std::vector<int>& words, const std::vector<char>& candidates) const;
-  // Compare, then update the best place if its posterior reaches match_threshold, or add a new
+  // Compare, then update the best place if its log odds reach match_log_odds, or add a new
   // place; `place` receives which.
   FabMapResult Add(const std::vector<int>& words, int* place = nullptr);
 

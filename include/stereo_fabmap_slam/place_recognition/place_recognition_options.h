@@ -28,6 +28,9 @@ enum class DetectorModelSource { kTrained, kFixed };
 // The prior over places: uniform, or favouring the neighbours of the last match.
 enum class LocationPrior { kUniform, kMotion };
 
+// Throws std::invalid_argument "<what>: need 0 <= p_z_given_not_e < p_z_given_e < 1" unless so.
+void ValidateDetectorRates(double p_z_given_e, double p_z_given_not_e, const std::string& what);
+
 struct FabMapOptions {
   static constexpr char kSection[] = "fabmap";
 
@@ -52,7 +55,12 @@ struct FabMapOptions {
   // children of the view's words, giving FAB-MAP 1.0's log-likelihoods (to the single precision
   // in which 2.0 sums each place's corrections: within 1e-6 of the value) and ranking.
   bool exact_tree_corrections = false;
-  double match_threshold = 0.5;  // Add(): update the best place at this posterior, else add one
+  // A view shows its best place when FabMapResult::best_log_odds reaches this, i.e. when that
+  // place is at least e^match_log_odds times likelier than a new one: Add() then updates it,
+  // otherwise adds a new place; evaluate_place_recognition reports precision and recall here.
+  // 0, "the likelier of the two", is the decision FAB-MAP's model itself makes, with no margin
+  // tuned to a sequence. (A threshold on the smoothed posterior cannot serve: it saturates.)
+  double match_log_odds = 0;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
@@ -121,8 +129,8 @@ struct PlaceRecognitionOptions {
   // Folder with vocabulary.bin, chow_liu_tree.bin and training_places.bin (train_fabmap); a
   // relative path is relative to the configuration file.
   std::string vocabulary_directory;
-  // The odometry's detector and descriptor, with a selection of its own: place recognition
-  // wants the strongest corners (they recur from view to view), odometry wants them spread out.
+  // The odometry's detector and descriptor, with a selection (how many corners, ANMS or the
+  // strongest) of its own: config/fabmap.yaml says which and why.
   features::FeatureOptions features;
   VocabularyOptions vocabulary;
   FabMapOptions fabmap;
