@@ -30,8 +30,8 @@ namespace fs = std::filesystem;
 constexpr char kUsage[] =
     "usage: train_fabmap --output DIR [--config FILE] [--fabmap-config FILE] [--spacing N]\n"
     "                    [--branching B] [--depth D] SOURCE [SOURCE ...]\n"
-    "SOURCE: a folder of images (*.png, *.jpg; every image is a training place) or a EuRoC ASL\n"
-    "sequence (left images, every N-th frame so that training views are distinct places).\n"
+    "SOURCE: a folder of images (*.png, *.jpg) or a EuRoC ASL sequence (left images); of each,\n"
+    "every N-th image (--spacing) is a training place, so that training views are distinct.\n"
     "Features: the detector and descriptor of --config (default config/euroc.yaml) with the\n"
     "selection, vocabulary size and spacing of --fabmap-config (default config/fabmap.yaml);\n"
     "the flags override the latter. Writes DIR/vocabulary.bin (branching^depth words at most),\n"
