@@ -68,9 +68,9 @@ constexpr char kUsage[] =
     "  --output DIR       place_recognition_pr.csv (method,mode,threshold,precision,recall,\n"
     "                     declared,correct), place_recognition_summary.csv, and\n"
     "                     place_recognition_queries.csv (one row per method, mode and query)\n"
+    "  --json             print one summary object instead of the table\n"
     "FAB-MAP's answers are ranked by their log odds against a new place; precision and recall\n"
-    "at fabmap.match_log_odds (the default threshold, 0) are reported beside the curve.\n"
-    "  --json             print one summary object instead of the table\n";
+    "at fabmap.match_log_odds (the default threshold, 0) are reported beside the curve.\n";
 
 double NowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();

@@ -31,7 +31,7 @@ struct DetectorModel {
 // t^2 + c1 t + c0 with m2 + c1 m1 + c0 m0 = 0 and m3 + c1 m2 + c0 m1 = 0. No word's rate is
 // fixed by hand: the training views say how repeatable the words are.
 // Throws std::invalid_argument when there are no triples or the moments admit no model with
-// 0 <= b < a <= 1 (views that share nothing, or as many words as the vocabulary).
+// 0 <= b < a < 1 (views that share nothing, or as many words as the vocabulary).
 DetectorModel EstimateDetectorModel(const std::vector<std::vector<std::vector<int>>>& sequences,
                                     int vocabulary_size);
 

@@ -51,7 +51,8 @@ struct FabMapResult {
   // places: consecutive keyframes of one location share its posterior, and a true revisit would
   // look unsure exactly where the map is dense. Against the new place, each place stands on its
   // own evidence; perceptual aliasing is the new-place model's to explain (common words are
-  // likely anywhere). The thresholds of loop detection and the evaluation's ranking use this.
+  // likely anywhere). Add() decides with it (match_log_odds), and the evaluation ranks by it;
+  // loop detection orders one query's candidates by posterior, which is the same order.
   double best_log_odds = -std::numeric_limits<double>::infinity();
   std::vector<double> log_likelihoods;  // log p(Z | place)
   double new_place_log_likelihood = 0;  // log p(Z | new place)
