@@ -200,6 +200,13 @@ def preset_section(directory):
     return "\n".join(text)
 
 
+def at_default(row):
+    if not row.get("precision_at_default"):
+        return "–"
+    return (f"{100 * number(row['precision_at_default']):.1f} / "
+            f"{100 * number(row['recall_at_default']):.1f} %")
+
+
 def place_recognition_section(directory):
     folder = os.path.join(directory, "place_recognition")
     if not os.path.isdir(folder):
@@ -207,10 +214,11 @@ def place_recognition_section(directory):
     text = ["## Place recognition: FAB-MAP alone and a tf-idf baseline (`evaluate_place_recognition`)\n"]
     text.append(
         "Every frame in turn queries the earlier frames' places (frames within the exclusion "
-        "window excluded); the acceptance threshold is swept. Ground truth: two frames show one "
+        "window excluded); the acceptance threshold is swept (FAB-MAP: the best place's log odds "
+        "against a new place; tf-idf: the cosine). Ground truth: two frames show one "
         "place when at least half of one's stereo points land in the other's image. FAB-MAP "
         "with one place per image, and with places updated on revisits; tf-idf cosine over "
-        "the same words.\n\n")
+        "the same words. Dots: FAB-MAP at its default threshold (fabmap.match_log_odds).\n\n")
     rows = []
     labels = sorted(os.listdir(folder))
     figure, axes = plt.subplots(1, len(labels), figsize=(4.5 * len(labels), 4), squeeze=False)
@@ -220,13 +228,17 @@ def place_recognition_section(directory):
         for row in summary:
             rows.append([label, row["method"], row["mode"], row["queries_with_true_match"],
                          f"{100 * number(row['recall_at_100_precision']):.1f} %",
-                         f"{number(row['auc']):.3f}", row.get("declared_new_places", "–")])
+                         f"{number(row['auc']):.3f}", row.get("declared_new_places", "–"),
+                         at_default(row)])
         axis = axes[0][index]
         for row in summary:
             points = [(number(r["recall"]), number(r["precision"])) for r in curves
                       if r["method"] == row["method"] and r["mode"] == row["mode"]]
-            axis.plot([p[0] for p in points], [p[1] for p in points],
-                      label=f"{row['method']} ({row['mode']})")
+            line, = axis.plot([p[0] for p in points], [p[1] for p in points],
+                              label=f"{row['method']} ({row['mode']})")
+            if row.get("precision_at_default"):
+                axis.plot([number(row["recall_at_default"])], [number(row["precision_at_default"])],
+                          "o", color=line.get_color())
         axis.set_title(f"Place recognition: {label}")
         axis.set_xlabel("recall")
         axis.set_ylabel("precision")
@@ -235,7 +247,8 @@ def place_recognition_section(directory):
         axis.grid(True, alpha=0.3)
         axis.legend(fontsize="x-small")
     text.append(table(["sequence", "method", "places", "queries with a true match",
-                       "recall at 100 % precision", "AUC", "new places declared"], rows))
+                       "recall at 100 % precision", "AUC", "new places declared",
+                       "precision / recall at the default threshold"], rows))
     name = save(figure, directory, "place_recognition_pr.png")
     text.append(f"\n![Place recognition precision-recall]({name})\n")
     return "\n".join(text)
