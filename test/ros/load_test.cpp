@@ -1,7 +1,11 @@
 // The graph under load and split over processes, on MH01_first10s (200 pairs, 10 s):
-// - at 5x real time the tracker cannot keep up on this machine (about 30 ms a pair against
-//   10 ms between pairs): it skips whole pairs, reports them once a second, and still makes
-//   the keyframes of a 1x run and a trajectory close to it;
+// - fast playback that the tracker cannot keep up with: it skips whole pairs, reports them once
+//   a second, and still makes the keyframes of a 1x run and a trajectory close to it. The rate
+//   is 3x: the machines CI runs on differ by nearly two times in speed (offline tracking median
+//   on MH01 7.35 ms on the one this test was first measured on, 12.8 ms on a later one), and 5x
+//   there, which skipped a third of the pairs, skipped 57 % on the slower one and lost the
+//   track (86 of 200 pairs with odometry, 24 keyframes against 30). 3x offers the slower machine
+//   the load 5x offered the faster; issue 14's own 5x figures are in docs/benchmarks.md;
 // - every nodelet standalone (its own process, messages serialised) gives the trajectory of
 //   the single manager.
 #include <map>
@@ -78,9 +82,9 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   EXPECT_GE(real_time.odometry.size(), 198u) << real_time.log;  // every pair but a startup one
   EXPECT_EQ(real_time.log.find("skipped"), std::string::npos) << "1x keeps up:\n" << real_time.log;
 
-  const GraphRun fast = PlayBag(bag, "rate:=5", temp.path() + "/5x.log");
-  RecordProperty("odometry_5x", static_cast<int>(fast.odometry.size()));
-  RecordProperty("keyframes_5x", fast.keyframes);
+  const GraphRun fast = PlayBag(bag, "rate:=3", temp.path() + "/3x.log");
+  RecordProperty("odometry_fast", static_cast<int>(fast.odometry.size()));
+  RecordProperty("keyframes_fast", fast.keyframes);
   EXPECT_NE(fast.log.find("stereo pair(s) in the last second: the tracker was still busy"),
             std::string::npos)
       << fast.log;
@@ -92,7 +96,7 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
        at = fast.log.find("tracking lost", at + 1)) {
     ++losses;
   }
-  RecordProperty("tracking_losses_5x", static_cast<int>(losses));
+  RecordProperty("tracking_losses_fast", static_cast<int>(losses));
   EXPECT_LE(losses, 1u) << fast.log;
   ASSERT_FALSE(fast.odometry.empty());
   EXPECT_GE(fast.odometry.back().timestamp, real_time.odometry.back().timestamp - 0.5)
@@ -104,10 +108,11 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   // Fewer than 85 % would leave gaps in the map.
   EXPECT_GE(fast.keyframes * 100, real_time.keyframes * 85);
   const double fast_ate = AteBetween(real_time.odometry, fast.odometry);
-  RecordProperty("ate_5x_against_1x_m", std::to_string(fast_ate));
+  RecordProperty("ate_fast_against_1x_m", std::to_string(fast_ate));
   // Which pairs are skipped depends on the machine's load, and so does the trajectory: six runs
-  // gave 2.0 to 13.9 mm against the 1x run over 0.39 m. 2.5 cm is well above that spread and
-  // still far below a lost or misjoined piece of odometry (tens of centimetres).
+  // at 5x on the faster machine gave 2.0 to 13.9 mm against the 1x run over 0.39 m, 3x on the
+  // slower one 13.0 and 16.1 mm (144 and 152 pairs, 28 and 30 keyframes, no loss). 2.5 cm is above that spread and still far below a lost or misjoined piece of
+  // odometry (tens of centimetres; 6.6 cm when 5x lost the track on the slower machine).
   EXPECT_LT(fast_ate, 0.025);
 
   const GraphRun split = PlayBag(bag, "rate:=1 standalone:=true", temp.path() + "/standalone.log");
