@@ -111,8 +111,9 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   RecordProperty("ate_fast_against_1x_m", std::to_string(fast_ate));
   // Which pairs are skipped depends on the machine's load, and so does the trajectory: six runs
   // at 5x on the faster machine gave 2.0 to 13.9 mm against the 1x run over 0.39 m, 3x on the
-  // slower one 13.0 and 16.1 mm (144 and 152 pairs, 28 and 30 keyframes, no loss). 2.5 cm is above that spread and still far below a lost or misjoined piece of
-  // odometry (tens of centimetres; 6.6 cm when 5x lost the track on the slower machine).
+  // slower one 13.0 and 16.1 mm (144 and 152 pairs, 28 and 30 keyframes, no loss). 2.5 cm is
+  // above that spread and still far below a lost or misjoined piece of odometry (tens of
+  // centimetres; 6.6 cm when 5x lost the track on the slower machine).
   EXPECT_LT(fast_ate, 0.025);
 
   const GraphRun split = PlayBag(bag, "rate:=1 standalone:=true", temp.path() + "/standalone.log");
