@@ -330,19 +330,20 @@ FabMapResult FabMap::Compare(const std::vector<int>& words,
   // As Compare with a uniform prior, over the candidates only.
   const double log_uniform = std::log((1 - options_.new_place_prior) / n);
   const double log_new = result.new_place_log_likelihood + std::log(options_.new_place_prior);
+  // The candidates' log joints go into `posterior` first and are exponentiated in place: no
+  // second array of the map's size on the query path.
   double top = log_new;
-  std::vector<double> log_joint(static_cast<std::size_t>(places));
   for (int i = 0; i < places; ++i) {
-    log_joint[i] = result.log_likelihoods[i] + log_uniform;
-    if (candidates[i] && (result.best < 0 || log_joint[i] > log_joint[result.best]))
-      result.best = i;
-    if (candidates[i]) top = std::max(top, log_joint[i]);
+    if (!candidates[i]) continue;
+    result.posterior[i] = result.log_likelihoods[i] + log_uniform;
+    if (result.best < 0 || result.posterior[i] > result.posterior[result.best]) result.best = i;
+    top = std::max(top, result.posterior[i]);
   }
-  result.best_log_odds = log_joint[static_cast<std::size_t>(result.best)] - log_new;
+  result.best_log_odds = result.posterior[static_cast<std::size_t>(result.best)] - log_new;
   double sum = 0;
   for (int i = 0; i < places; ++i) {
     if (!candidates[i]) continue;
-    result.posterior[i] = std::exp(log_joint[i] - top);
+    result.posterior[i] = std::exp(result.posterior[i] - top);
     sum += result.posterior[i];
   }
   const double new_joint = std::exp(log_new - top);
