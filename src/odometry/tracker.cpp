@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "stereo_fabmap_slam/features/descriptor_matching.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/keypoint_grid.h"
 
@@ -45,6 +46,12 @@ Tracker::Tracker(const TrackerOptions& options, const KeyframePolicyOptions& key
   ransac_options_.kernel = options.pnp_kernel;
   ransac_options_.reprojection_threshold = options.ransac_threshold;
   ransac_options_.max_iterations = options.ransac_iterations;
+  // Matches by descriptor alone have a lower inlier ratio than those found by projection (down
+  // to a third, where repeated texture gives look-alikes): 100 AP3P samples then find an
+  // all-inlier triple with 93 % probability, 500 with 99.9999 %. OpenCV stops early once the
+  // consensus is large, so the cost is paid only when the matches are poor.
+  ransac_options_without_prior_ = ransac_options_;
+  ransac_options_without_prior_.max_iterations = 5 * options.ransac_iterations;
 }
 
 void Tracker::Reset() {
@@ -119,6 +126,40 @@ std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFe
   std::sort(matches.begin(), matches.end(),
             [](const Match& a, const Match& b) { return a.keypoint < b.keypoint; });
   return matches;
+}
+
+std::vector<Tracker::Match> Tracker::SearchByDescriptor(
+    const features::StereoFeatures& features) const {
+  std::vector<const MapPoint*> points;
+  cv::Mat descriptors;
+  points.reserve(local_map_.points().size());
+  for (const auto& entry : local_map_.points()) {
+    points.push_back(&entry.second);
+    descriptors.push_back(entry.second.descriptor);
+  }
+  std::vector<Match> matches;
+  for (const cv::DMatch& m :
+       features::RatioTestMatches(features.descriptors, descriptors, descriptor_norm_,
+                                  max_descriptor_distance_, options_.match_ratio)) {
+    matches.push_back(Match{points[static_cast<std::size_t>(m.trainIdx)], m.queryIdx,
+                            static_cast<double>(m.distance)});
+  }
+  return matches;
+}
+
+geometry::PnpResult Tracker::SolvePose(const features::StereoFeatures& features,
+                                       const std::vector<Match>& matches,
+                                       const geometry::PnpRansacOptions& ransac_options,
+                                       const Eigen::Isometry3d& guess) const {
+  std::vector<geometry::PnpCorrespondence> correspondences;
+  correspondences.reserve(matches.size());
+  for (const Match& m : matches) {
+    const auto i = static_cast<std::size_t>(m.keypoint);
+    const cv::Point2f& pixel = features.keypoints[i].pt;
+    correspondences.push_back(
+        {m.point->position, {pixel.x, pixel.y}, features.HasDepth(i), features.points[i]});
+  }
+  return geometry::SolvePnpRansac(correspondences, camera_, ransac_options, guess);
 }
 
 std::vector<PoseObservation> Tracker::Observations(const features::StereoFeatures& features,
@@ -258,29 +299,40 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   if (static_cast<int>(matches.size()) < options_.min_inliers_ok) {
     matches = SearchByProjection(features, predicted.inverse(), 3.0 * options_.search_radius);
   }
-  std::vector<PoseObservation> observations = Observations(features, matches);
-  std::vector<geometry::PnpCorrespondence> correspondences;
-  for (std::size_t k = 0; k < matches.size(); ++k) {
-    const int i = matches[k].keypoint;
-    correspondences.push_back({observations[k].world,
-                               {observations[k].u, observations[k].v},
-                               features.HasDepth(static_cast<std::size_t>(i)),
-                               features.points[static_cast<std::size_t>(i)]});
-  }
-  const geometry::PnpResult ransac =
-      geometry::SolvePnpRansac(correspondences, camera_, ransac_options_, predicted.inverse());
+  geometry::PnpResult ransac = SolvePose(features, matches, ransac_options_, predicted.inverse());
   result.matches = static_cast<int>(matches.size());
-  if (!ransac.success || static_cast<int>(ransac.inliers.size()) < options_.min_inliers_weak) {
+  const auto inliers = [](const geometry::PnpResult& r) {
+    return r.success ? static_cast<int>(r.inliers.size()) : 0;
+  };
+  const bool searched_by_descriptor = inliers(ransac) < options_.min_inliers_ok;
+  if (searched_by_descriptor) {
+    // The prediction found too little: the camera moved other than the motion model says (it
+    // turned or stopped over frames a busy tracker skipped, or right after a new map started
+    // with an old velocity). Descriptors alone find the frame in the local map wherever it is;
+    // the better of the two consensus sets wins, so a weak but right prediction is kept.
+    const std::vector<Match> by_descriptor = SearchByDescriptor(features);
+    geometry::PnpResult without_prior =
+        SolvePose(features, by_descriptor, ransac_options_without_prior_, predicted.inverse());
+    if (inliers(without_prior) > inliers(ransac)) {
+      result.reason = "found by descriptor (" + std::to_string(inliers(without_prior)) +
+                      " RANSAC inliers of " + std::to_string(by_descriptor.size()) +
+                      " matches; the prediction gave " + std::to_string(inliers(ransac)) + ")";
+      ransac = std::move(without_prior);
+      result.matches = static_cast<int>(by_descriptor.size());
+    }
+  }
+  if (inliers(ransac) < options_.min_inliers_weak) {
     result.state = TrackingState::kLost;
-    result.reason = "only " + std::to_string(ransac.inliers.size()) + " RANSAC inliers of " +
-                    std::to_string(matches.size()) + " matches";
+    result.reason = "only " + std::to_string(inliers(ransac)) + " RANSAC inliers of " +
+                    std::to_string(result.matches) + " matches" +
+                    (searched_by_descriptor ? ", by projection or by descriptor" : "");
     return StartOver(timestamp, std::move(features), predicted, std::move(result));
   }
   // The RANSAC pose is already re-fitted to its whole consensus set (by OpenCV, or by the
   // Umeyama kernel): good enough to search again with a fine radius, which finds the points
   // the coarse search missed, before the robust refinement.
   matches = SearchByProjection(features, ransac.T_camera_world, options_.search_radius_fine);
-  observations = Observations(features, matches);
+  std::vector<PoseObservation> observations = Observations(features, matches);
   const PoseRefinement refined =
       RefinePose(observations, camera_, ransac.T_camera_world, options_.refinement);
   std::vector<Match> inlier_matches;
@@ -297,13 +349,15 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
 
   if (result.inliers < options_.min_inliers_weak) {
     result.state = TrackingState::kLost;
-    result.reason = "only " + std::to_string(result.inliers) + " inliers after refinement";
+    result.reason += (result.reason.empty() ? "" : "; ") + std::string("only ") +
+                     std::to_string(result.inliers) + " inliers after refinement";
     return StartOver(timestamp, std::move(features), predicted, std::move(result));
   }
   result.state =
       result.inliers < options_.min_inliers_ok ? TrackingState::kWeak : TrackingState::kOk;
   if (result.state == TrackingState::kWeak) {
-    result.reason = std::to_string(result.inliers) + " inliers";
+    result.reason +=
+        (result.reason.empty() ? "" : "; ") + std::to_string(result.inliers) + " inliers";
   }
 
   KeyframePolicyInput policy_input;

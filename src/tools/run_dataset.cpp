@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -28,7 +29,7 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 constexpr char kUsage[] =
     "usage: run_dataset ASL_DIR [--config FILE] [--fabmap-config FILE] [--no-loop-closing]\n"
     "                   [--load-map FILE] [--mode mapping|localization] [--save-map FILE]\n"
-    "                   [--output DIR] [--quiet]\n"
+    "                   [--every N] [--output DIR] [--quiet]\n"
     "Runs the stereo SLAM on an EuRoC sequence and writes to DIR (default output/<name>):\n"
     "  trajectory.txt  TUM, rectified left camera in the map frame (after loop closing), every "
     "frame\n"
@@ -40,6 +41,8 @@ constexpr char kUsage[] =
     "--load-map starts from a map saved by --save-map (same vocabulary and camera); with\n"
     "--mode localization it is used without being extended: the camera is relocalized in it at\n"
     "start, after every loss and at each keyframe, and trajectory.txt is in the map's frame.\n"
+    "--every N processes every Nth stereo pair only, as a tracker that cannot keep up with a\n"
+    "camera (or a bag played N times faster) sees them; default 1.\n"
     "Default configs: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml, " STEREO_FABMAP_SLAM_CONFIG_DIR
     "/fabmap.yaml\n";
 
@@ -151,16 +154,21 @@ void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::st
 
 int main(int argc, char** argv) {
   std::optional<tools::CommandLine> args;
+  double every = 1;
   try {
-    args.emplace(
-        argc, argv,
-        std::set<std::string>{"config", "fabmap-config", "output", "load-map", "save-map", "mode"},
-        std::set<std::string>{"quiet", "help", "no-loop-closing"});
+    args.emplace(argc, argv,
+                 std::set<std::string>{"config", "fabmap-config", "output", "load-map", "save-map",
+                                       "mode", "every"},
+                 std::set<std::string>{"quiet", "help", "no-loop-closing"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
     }
     if (args->positional().size() != 1) throw std::invalid_argument("expected one ASL_DIR");
+    every = args->NumberOr("every", 1);
+    if (!(every >= 1) || every != std::floor(every)) {
+      throw std::invalid_argument("--every is a whole number of pairs, at least 1");
+    }
   } catch (const std::invalid_argument& error) {
     std::fprintf(stderr, "run_dataset: %s\n%s", error.what(), kUsage);
     return 2;
@@ -226,7 +234,9 @@ int main(int argc, char** argv) {
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
-    for (std::size_t i = 0; i < sequence.size(); ++i) {
+    std::size_t processed = 0;
+    for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(every)) {
+      ++processed;
       const datasets::StereoImages images = sequence.LoadStereoPair(i);
       const double start = NowMs();
       const pipeline::FrameRecord& frame =
@@ -272,8 +282,8 @@ int main(int argc, char** argv) {
         std::count_if(slam.frames().begin(), slam.frames().end(),
                       [](const pipeline::FrameRecord& f) { return f.is_keyframe; }));
     const std::size_t map_keyframes = slam.map() ? slam.map()->pose_graph().size() : 0;
-    std::string json = "{\"sequence\": \"" + name +
-                       "\", \"frames\": " + std::to_string(sequence.size()) +
+    std::string json = "{\"sequence\": \"" + name + "\", \"frames\": " + std::to_string(processed) +
+                       ", \"every\": " + std::to_string(static_cast<int>(every)) +
                        ", \"frames_tracked\": " + std::to_string(tracked) +
                        ", \"keyframes\": " + std::to_string(keyframes) + ", \"mode\": \"" +
                        (mode == pipeline::SlamMode::kMapping ? "mapping" : "localization") +

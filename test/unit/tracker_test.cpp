@@ -1,5 +1,5 @@
 // Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model;
-// the motion model spans skipped frames.
+// the motion model spans skipped frames; a motion it does not predict is found by descriptor.
 #include "stereo_fabmap_slam/odometry/tracker.h"
 
 #include <gtest/gtest.h>
@@ -94,7 +94,46 @@ TEST(Tracker, SkippedFramesDoNotLoseTracking) {
   const odometry::TrackingResult after_gap = tracker.Track(0.06, Observe(world, at(1.8)));
   EXPECT_NE(after_gap.state, odometry::TrackingState::kLost) << after_gap.reason;
   EXPECT_FALSE(after_gap.keyframe && after_gap.keyframe->starts_new_map) << after_gap.reason;
+  EXPECT_EQ(after_gap.reason.find("by descriptor"), std::string::npos) << after_gap.reason;
   EXPECT_LT((after_gap.T_world_camera.translation() - at(1.8).translation()).norm(), 1e-3);
+}
+
+TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
+  // The camera slides sideways 0.3 m every 10 ms; over the next 40 ms (three frames skipped) it
+  // stops and turns 8 degrees to the right. The prediction, 1.2 m further to the right and not
+  // turned, puts every point   // 69-183 px (1.2 m at 3-8 m, fx 458) and 64 px (the turn) from
+  // where it is, far beyond the widest search around it (3 x 15 px): by projection alone the frame
+  // would start a new map.
+  StereoWorld world;
+  world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
+  odometry::TrackerOptions options;
+  options.parallel = false;
+  odometry::Tracker tracker(options, odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,
+                            60.0);
+  const auto at = [](double x, double yaw_deg) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation().x() = x;
+    pose.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitY()).matrix();
+    return pose;
+  };
+  for (const int frame : {0, 1, 2}) {
+    const odometry::TrackingResult result =
+        tracker.Track(0.01 * frame, Observe(world, at(0.3 * frame, 0)));
+    ASSERT_NE(result.state, odometry::TrackingState::kLost) << frame << ": " << result.reason;
+  }
+  const Eigen::Isometry3d turned = at(0.6, -8.0);
+  const odometry::TrackingResult after = tracker.Track(0.06, Observe(world, turned));
+  EXPECT_EQ(after.state, odometry::TrackingState::kOk) << after.reason;
+  EXPECT_NE(after.reason.find("found by descriptor"), std::string::npos) << after.reason;
+  EXPECT_FALSE(after.keyframe && after.keyframe->starts_new_map) << after.reason;
+  EXPECT_LT((after.T_world_camera.translation() - turned.translation()).norm(), 1e-3);
+  EXPECT_LT(Eigen::AngleAxisd(after.T_world_camera.linear().transpose() * turned.linear()).angle(),
+            1e-4);
+  // The motion model now holds the stop and the turn (2 degrees, 16 px, per 10 ms): the next
+  // frame 10 ms later, where the camera stopped turning, is within the wider search.
+  const odometry::TrackingResult next = tracker.Track(0.07, Observe(world, turned));
+  EXPECT_EQ(next.state, odometry::TrackingState::kOk) << next.reason;
+  EXPECT_EQ(next.reason.find("by descriptor"), std::string::npos) << next.reason;
 }
 
 }  // namespace

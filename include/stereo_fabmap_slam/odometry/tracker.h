@@ -48,7 +48,9 @@ struct TrackingResult {
 // Frame-to-map tracking: predicts the pose with a constant-velocity model, finds local map points
 // in the frame by projection and descriptor, estimates the pose with RANSAC (a selectable
 // kernel) and refines it with a robust motion-only optimisation, searches again around the
-// refined projections, and decides on keyframes. Deterministic for a given input sequence.
+// refined projections, and decides on keyframes. When the prediction finds too little, the frame
+// is matched to the local map by descriptor alone before tracking is declared lost.
+// Deterministic for a given input sequence.
 class Tracker {
  public:
   // Throws std::invalid_argument for bad options.
@@ -81,6 +83,12 @@ class Tracker {
   std::vector<Match> SearchByProjection(const features::StereoFeatures& features,
                                         const Eigen::Isometry3d& T_camera_world,
                                         double radius) const;
+  // Every local map point against every key point, by descriptor and ratio test: no pose needed.
+  std::vector<Match> SearchByDescriptor(const features::StereoFeatures& features) const;
+  geometry::PnpResult SolvePose(const features::StereoFeatures& features,
+                                const std::vector<Match>& matches,
+                                const geometry::PnpRansacOptions& ransac_options,
+                                const Eigen::Isometry3d& guess) const;
   std::vector<PoseObservation> Observations(const features::StereoFeatures& features,
                                             const std::vector<Match>& matches) const;
   map::Keyframe MakeKeyframe(double timestamp, features::StereoFeatures features,
@@ -101,6 +109,7 @@ class Tracker {
   KeyframePolicy keyframe_policy_;
   geometry::StereoCamera camera_;
   geometry::PnpRansacOptions ransac_options_;
+  geometry::PnpRansacOptions ransac_options_without_prior_;
   int descriptor_norm_;
   double max_descriptor_distance_;
 
