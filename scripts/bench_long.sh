@@ -54,6 +54,13 @@ print(f"| ATE RMSE loop-closed [cm] | {100 * summary.get('ate_rmse', float('nan'
 print(f"| resident memory at 1 min / end [MB] | {points[len(points) // 10][1]:.0f} / {points[-1][1]:.0f} |")
 print(f"| memory per keyframe (fit past the first minute) | {slope * 1048576 / 1024:.0f} kB |")
 print(f"| tracking median, first / last minute [ms] | {track(first):.2f} / {track(last):.2f} |")
+# The stages of that time, and the tracked points: whether a growth is the map's (tracking,
+# inliers) or the images' (detection, description, stereo).
+for stage in ("detection", "description", "stereo", "tracking"):
+    print(f"| {stage} median, first / last minute [ms] | "
+          f"{median(column(stage + '_ms', first)):.2f} / {median(column(stage + '_ms', last)):.2f} |")
+print(f"| inliers median, first / last minute | "
+      f"{median(column('inliers', first)):.0f} / {median(column('inliers', last)):.0f} |")
 print(f"| loop detection median, last minute [ms] | {median(loops_last):.2f} |")
 print(f"| pose graph median / max, last minute [ms] | {median(graph_last):.1f} / {max(graph_last) if graph_last else float('nan'):.1f} |")
 print(f"| peak RSS [MB] | {summary['peak_rss_mb']:.0f} |")

@@ -70,59 +70,60 @@ TEST(Tracker, ApplyUpdateWithoutAMapChangesNothing) {
   EXPECT_TRUE(first.T_world_camera.isApprox(Eigen::Isometry3d::Identity()));
 }
 
-TEST(Tracker, SkippedFramesDoNotLoseTracking) {
-  // A camera sliding sideways 0.3 m every 10 ms past points 3-8 m away. After three frames come
-  // three skipped ones (a busy tracker): 0.9 m of motion that a prediction of one frame's motion
-  // misses by 51-137 px, beyond the widest search around it (3 x 15 px). Only a motion model
-  // that spans the gap's time predicts the pose after it well enough.
+// A camera at `x` [m] to the side of the origin, turned `yaw_deg` to the right.
+Eigen::Isometry3d SidewaysAndTurned(double x, double yaw_deg = 0) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation().x() = x;
+  pose.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitY()).matrix();
+  return pose;
+}
+
+// Points 3-8 m away across a wide wall, and a tracker (one thread) that has followed a camera
+// sliding sideways past them 0.3 m every 10 ms for three frames (t = 0, 0.01, 0.02 s).
+struct SlidingCamera {
   StereoWorld world;
-  world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
-  odometry::TrackerOptions options;
-  options.parallel = false;
-  odometry::Tracker tracker(options, odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,
-                            60.0);
-  const auto at = [](double x) {
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.translation().x() = x;
-    return pose;
-  };
-  for (const int frame : {0, 1, 2}) {
-    const odometry::TrackingResult result =
-        tracker.Track(0.01 * frame, Observe(world, at(0.3 * frame)));
-    ASSERT_NE(result.state, odometry::TrackingState::kLost) << frame << ": " << result.reason;
+  odometry::Tracker tracker;
+
+  SlidingCamera()
+      : tracker(SerialOptions(), odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,
+                60.0) {
+    world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
+    for (const int frame : {0, 1, 2}) {
+      const odometry::TrackingResult result =
+          tracker.Track(0.01 * frame, Observe(world, SidewaysAndTurned(0.3 * frame)));
+      EXPECT_NE(result.state, odometry::TrackingState::kLost) << frame << ": " << result.reason;
+    }
   }
-  const odometry::TrackingResult after_gap = tracker.Track(0.06, Observe(world, at(1.8)));
+  static odometry::TrackerOptions SerialOptions() {
+    odometry::TrackerOptions options;
+    options.parallel = false;
+    return options;
+  }
+};
+
+TEST(Tracker, SkippedFramesDoNotLoseTracking) {
+  // After the three frames come three skipped ones (a busy tracker): 0.9 m of motion that a
+  // prediction of one frame's motion misses by 51-137 px, beyond the widest search around it
+  // (3 x 15 px). Only a motion model that spans the gap's time predicts the pose after it well
+  // enough to find the frame by projection.
+  SlidingCamera camera;
+  const odometry::TrackingResult after_gap =
+      camera.tracker.Track(0.06, Observe(camera.world, SidewaysAndTurned(1.8)));
   EXPECT_NE(after_gap.state, odometry::TrackingState::kLost) << after_gap.reason;
   EXPECT_FALSE(after_gap.keyframe && after_gap.keyframe->starts_new_map) << after_gap.reason;
   EXPECT_EQ(after_gap.reason.find("by descriptor"), std::string::npos) << after_gap.reason;
-  EXPECT_LT((after_gap.T_world_camera.translation() - at(1.8).translation()).norm(), 1e-3);
+  EXPECT_LT((after_gap.T_world_camera.translation() - SidewaysAndTurned(1.8).translation()).norm(),
+            1e-3);
 }
 
 TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
-  // The camera slides sideways 0.3 m every 10 ms; over the next 40 ms (three frames skipped) it
-  // stops and turns 8 degrees to the right. The prediction, 1.2 m further to the right and not
-  // turned, puts every point   // 69-183 px (1.2 m at 3-8 m, fx 458) and 64 px (the turn) from
-  // where it is, far beyond the widest search around it (3 x 15 px): by projection alone the frame
-  // would start a new map.
-  StereoWorld world;
-  world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
-  odometry::TrackerOptions options;
-  options.parallel = false;
-  odometry::Tracker tracker(options, odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,
-                            60.0);
-  const auto at = [](double x, double yaw_deg) {
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.translation().x() = x;
-    pose.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitY()).matrix();
-    return pose;
-  };
-  for (const int frame : {0, 1, 2}) {
-    const odometry::TrackingResult result =
-        tracker.Track(0.01 * frame, Observe(world, at(0.3 * frame, 0)));
-    ASSERT_NE(result.state, odometry::TrackingState::kLost) << frame << ": " << result.reason;
-  }
-  const Eigen::Isometry3d turned = at(0.6, -8.0);
-  const odometry::TrackingResult after = tracker.Track(0.06, Observe(world, turned));
+  // Over the 40 ms after the three frames (three skipped) the camera stops and turns 8 degrees
+  // to the right. The prediction, 1.2 m further to the right and not turned, puts every point
+  // 69-183 px (1.2 m at 3-8 m, fx 458) and 64 px (the turn) from where it is, far beyond the
+  // widest search around it (3 x 15 px): by projection alone the frame would start a new map.
+  SlidingCamera camera;
+  const Eigen::Isometry3d turned = SidewaysAndTurned(0.6, -8.0);
+  const odometry::TrackingResult after = camera.tracker.Track(0.06, Observe(camera.world, turned));
   EXPECT_EQ(after.state, odometry::TrackingState::kOk) << after.reason;
   EXPECT_NE(after.reason.find("found by descriptor"), std::string::npos) << after.reason;
   EXPECT_FALSE(after.keyframe && after.keyframe->starts_new_map) << after.reason;
@@ -131,7 +132,7 @@ TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
             1e-4);
   // The motion model now holds the stop and the turn (2 degrees, 16 px, per 10 ms): the next
   // frame 10 ms later, where the camera stopped turning, is within the wider search.
-  const odometry::TrackingResult next = tracker.Track(0.07, Observe(world, turned));
+  const odometry::TrackingResult next = camera.tracker.Track(0.07, Observe(camera.world, turned));
   EXPECT_EQ(next.state, odometry::TrackingState::kOk) << next.reason;
   EXPECT_EQ(next.reason.find("by descriptor"), std::string::npos) << next.reason;
 }
