@@ -53,7 +53,7 @@ print(f"| frames, keyframes | {summary['frames']}, {summary['keyframes']} |")
 print(f"| ATE RMSE loop-closed [cm] | {100 * summary.get('ate_rmse', float('nan')):.2f} |")
 print(f"| resident memory at 1 min / end [MB] | {points[len(points) // 10][1]:.0f} / {points[-1][1]:.0f} |")
 print(f"| memory per keyframe (fit past the first minute) | {slope * 1048576 / 1024:.0f} kB |")
-print(f"| tracking median, first / last minute [ms] | {track(first):.2f} / {track(last):.2f} |")
+print(f"| per-frame total (detection to tracking) median, first / last minute [ms] | {track(first):.2f} / {track(last):.2f} |")
 # The stages of that time, and the tracked points: whether a growth is the map's (tracking,
 # inliers) or the images' (detection, description, stereo).
 for stage in ("detection", "description", "stereo", "tracking"):
