@@ -166,8 +166,9 @@ int main(int argc, char** argv) {
     }
     if (args->positional().size() != 1) throw std::invalid_argument("expected one ASL_DIR");
     every = args->NumberOr("every", 1);
-    if (!(every >= 1) || every != std::floor(every)) {
-      throw std::invalid_argument("--every is a whole number of pairs, at least 1");
+    // A million pairs is 14 hours at 20 Hz: beyond any sequence, and a bound the cast can take.
+    if (!(every >= 1 && every <= 1e6) || every != std::floor(every)) {
+      throw std::invalid_argument("--every is a whole number of pairs, 1 to 1000000");
     }
   } catch (const std::invalid_argument& error) {
     std::fprintf(stderr, "run_dataset: %s\n%s", error.what(), kUsage);
@@ -242,7 +243,7 @@ int main(int argc, char** argv) {
       const pipeline::FrameRecord& frame =
           slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
       processing_ms += NowMs() - start;
-      if (!quiet && (frame.state == odometry::TrackingState::kLost || (i + 1) % 100 == 0)) {
+      if (!quiet && (frame.state == odometry::TrackingState::kLost || processed % 100 == 0)) {
         std::printf("frame %zu/%zu: %s, %zu keyframes, resident %.1f MB\n", i + 1, sequence.size(),
                     odometry::TrackingStateName(frame.state), slam.keyframe_count(),
                     ResidentMegabytes());
