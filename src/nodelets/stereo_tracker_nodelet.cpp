@@ -119,6 +119,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   // the same image again under a new stamp. Worker thread only.
   cv_bridge::CvImageConstPtr previous_left_, previous_right_;
   int frozen_frames_ = 0;
+  int frames_lost_with_map_kept_ = 0;  // lost in a row, the tracker's map kept
 
   // Between the synchroniser and the worker: at most one pair waits while one is tracked, so
   // that a tracker slower than the camera (a bag played fast, a busy machine) skips pairs
@@ -549,7 +550,18 @@ void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_me
     const pipeline::FrontEndOutput output =
         front_end_->Process(stamp.toSec(), left->image, right->image);
     if (output.tracking.state == odometry::TrackingState::kLost) {
-      NODELET_WARN_THROTTLE(2, "tracking lost: %s", output.tracking.reason.c_str());
+      if (output.tracking.keyframe && output.tracking.keyframe->starts_new_map) {
+        // A new piece of odometry: once per piece, never throttled, so that they can be counted.
+        NODELET_WARN("tracking lost: %s", output.tracking.reason.c_str());
+      } else {
+        NODELET_WARN_THROTTLE(2, "tracking lost: %s", output.tracking.reason.c_str());
+      }
+      // Counted while the map is kept; a new piece ends the count (its warning said so).
+      frames_lost_with_map_kept_ = output.tracking.map_kept ? frames_lost_with_map_kept_ + 1 : 0;
+    } else if (frames_lost_with_map_kept_ > 0) {
+      NODELET_INFO("tracking found the map again after %d lost frame(s); odom goes on unbroken",
+                   frames_lost_with_map_kept_);
+      frames_lost_with_map_kept_ = 0;
     }
     Publish(stamp, output.tracking);
     // Drawn only for someone who looks: a colour copy of every frame is not free.
@@ -595,7 +607,10 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
   // A new piece of odometry (after a loss, or a reset when time went backwards) is not in the
   // map until a relocalization (or a loop) joins it.
   const bool new_piece = result.keyframe && result.keyframe->starts_new_map;
-  const bool broken = new_piece || result.state == odometry::TrackingState::kLost;
+  // A lost frame whose map the tracker kept has no pose, but the odometry goes on unbroken if
+  // a later frame is tracked; if none is, a new piece follows.
+  const bool broken =
+      new_piece || (result.state == odometry::TrackingState::kLost && !result.map_kept);
   if (localization) {
     if (broken) localized_ = false;  // the old map -> odom no longer holds
   } else if (broken && map_has_keyframes_) {

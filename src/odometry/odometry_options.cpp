@@ -53,6 +53,7 @@ void TrackerOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_map_points", &min_map_points);
   visitor.Visit("local_keyframes", &local_keyframes);
   visitor.Visit("max_prediction_gap", &max_prediction_gap);
+  visitor.Visit("max_time_lost", &max_time_lost);
   visitor.Visit("parallel", &parallel);
   visitor.Visit("refinement_sigma", &refinement.sigma);
   visitor.Visit("refinement_rounds", &refinement.rounds);
@@ -74,6 +75,7 @@ void TrackerOptions::Validate() const {
   }
   if (!(max_prediction_gap > 0))
     throw std::invalid_argument("tracker.max_prediction_gap must be > 0");
+  if (!(max_time_lost >= 0)) throw std::invalid_argument("tracker.max_time_lost must be >= 0");
   if (min_map_points < 3 || local_keyframes < 1) {
     throw std::invalid_argument("tracker: min_map_points >= 3 and local_keyframes >= 1");
   }

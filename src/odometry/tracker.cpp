@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <future>
 #include <limits>
 #include <stdexcept>
@@ -256,18 +257,48 @@ void ClassifyKeypoints(const features::StereoFeatures& features, const std::vect
   }
 }
 
+// The pose is the motion model's guess (or the origin), not an estimate: its covariance is
+// unknown, and no key point was tracked, whatever a failed attempt classified.
+void MarkUntracked(const features::StereoFeatures& features, TrackingResult* result) {
+  constexpr double kUnknownVariance = 1e6;
+  result->covariance = geometry::PoseCovariance::Identity() * kUnknownVariance;
+  result->inlier_pixels.clear();
+  result->outlier_pixels.clear();
+  result->untracked_pixels.clear();
+  ClassifyKeypoints(features, {}, {}, result);
+}
+
 }  // namespace
+
+TrackingResult Tracker::Lose(double timestamp, features::StereoFeatures features,
+                             const Eigen::Isometry3d& predicted, int consensus,
+                             TrackingResult result) {
+  // The map is kept only for a frame that still sees it, if too poorly to trust a pose (motion
+  // blur, a close-up of few points): a consensus beyond a minimal sample (4 points for P3P and
+  // its check). Matches that are wrong agree with a pose within the RANSAC threshold by chance
+  // with odds of about 1e-4 each (a 2 px disc in a 752 x 480 image), so two beyond the sample
+  // are evidence. A camera that sees nothing of the local map (kidnapped, or facing a wall)
+  // starts a new piece at once, which relocalization joins to the map.
+  constexpr int kConsensusThatSeesTheMap = 6;
+  const double since_tracked = timestamp - last_timestamp_;
+  if (since_tracked > options_.max_time_lost || consensus < kConsensusThatSeesTheMap) {
+    return StartOver(timestamp, std::move(features), predicted, std::move(result));
+  }
+  // Nothing is remembered: the next frame is predicted from the last tracked one, over the
+  // whole gap, and the time without tracking keeps counting from there.
+  MarkUntracked(features, &result);
+  result.T_world_camera = predicted;
+  result.map_kept = true;
+  char kept[96];
+  std::snprintf(kept, sizeof(kept), "; map kept (%.2f s since the last tracked frame, at most %.2f)",
+                since_tracked, options_.max_time_lost);
+  result.reason += kept;
+  return result;
+}
 
 TrackingResult Tracker::StartOver(double timestamp, features::StereoFeatures features,
                                   const Eigen::Isometry3d& predicted, TrackingResult result) {
-  // The pose is the motion model's guess (or the origin), not an estimate: its covariance is
-  // unknown, and no key point was tracked, whatever a failed attempt classified.
-  constexpr double kUnknownVariance = 1e6;
-  result.covariance = geometry::PoseCovariance::Identity() * kUnknownVariance;
-  result.inlier_pixels.clear();
-  result.outlier_pixels.clear();
-  result.untracked_pixels.clear();
-  ClassifyKeypoints(features, {}, {}, &result);
+  MarkUntracked(features, &result);
   StartMap(timestamp, std::move(features), predicted, &result);
   if (!result.keyframe) result.state = TrackingState::kLost;
   Remember(timestamp, predicted, &result);
@@ -333,7 +364,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
     result.reason = "only " + std::to_string(inliers(ransac)) + " RANSAC inliers of " +
                     std::to_string(result.matches) + " matches" +
                     (searched_by_descriptor ? ", by projection or by descriptor" : "");
-    return StartOver(timestamp, std::move(features), predicted, std::move(result));
+    return Lose(timestamp, std::move(features), predicted, inliers(ransac), std::move(result));
   }
   // The RANSAC pose is already re-fitted to its whole consensus set (by OpenCV, or by the
   // Umeyama kernel): good enough to search again with a fine radius, which finds the points
@@ -358,7 +389,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
     result.state = TrackingState::kLost;
     result.reason += (result.reason.empty() ? "" : "; ") + std::string("only ") +
                      std::to_string(result.inliers) + " inliers after refinement";
-    return StartOver(timestamp, std::move(features), predicted, std::move(result));
+    return Lose(timestamp, std::move(features), predicted, inliers(ransac), std::move(result));
   }
   result.state =
       result.inliers < options_.min_inliers_ok ? TrackingState::kWeak : TrackingState::kOk;

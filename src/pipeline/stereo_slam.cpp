@@ -109,8 +109,9 @@ void StereoSlam::RecoverIntoMap(const FrontEndOutput& output, FrameRecord* recor
 
 void StereoSlam::Localize(const FrontEndOutput& output, FrameRecord* record) {
   const odometry::TrackingResult& result = output.tracking;
-  // A loss breaks the odometry: the old map -> odom no longer holds.
-  if (result.state == odometry::TrackingState::kLost) localized_ = false;
+  // A loss that starts a new piece breaks the odometry: the old map -> odom no longer holds. A
+  // lost frame whose map the tracker kept has no pose, but the odometry goes on unbroken.
+  if (result.state == odometry::TrackingState::kLost && !result.map_kept) localized_ = false;
   const bool attempt =
       localized_ ? result.keyframe.has_value()
                  : frames_off_map_++ % relocalization_->options().attempt_every_n_frames == 0;
@@ -172,6 +173,8 @@ evaluation::Trajectory StereoSlam::OdometryTrajectory() const {
   const std::map<std::int64_t, Eigen::Isometry3d> keyframes = backend_.KeyframePoses();
   evaluation::Trajectory trajectory;
   for (const FrameRecord& frame : frames_) {
+    // A lost frame without a keyframe to refer to has no pose, only the motion model's guess.
+    if (frame.state == odometry::TrackingState::kLost && frame.reference_keyframe < 0) continue;
     const auto keyframe = keyframes.find(frame.reference_keyframe);
     trajectory.push_back({frame.timestamp, keyframe == keyframes.end()
                                                ? frame.T_world_camera

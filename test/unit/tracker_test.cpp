@@ -1,5 +1,6 @@
 // Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model;
-// the motion model spans skipped frames; a motion it does not predict is found by descriptor.
+// the motion model spans skipped frames; a motion it does not predict is found by descriptor; a
+// lost frame that still shows the map keeps it for the next frames, for a while.
 #include "stereo_fabmap_slam/odometry/tracker.h"
 
 #include <gtest/gtest.h>
@@ -135,6 +136,75 @@ TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
   const odometry::TrackingResult next = camera.tracker.Track(0.07, Observe(camera.world, turned));
   EXPECT_EQ(next.state, odometry::TrackingState::kOk) << next.reason;
   EXPECT_EQ(next.reason.find("by descriptor"), std::string::npos) << next.reason;
+}
+
+// A frame that still shows the map, too poorly to trust a pose (motion blur leaves a few of its
+// corners): ten of the key points the camera at `T_world_camera` sees, and sixty of points the
+// map does not hold, enough stereo points for a new map.
+features::StereoFeatures Glimpse(const StereoWorld& world, const Eigen::Isometry3d& T_world_camera) {
+  features::StereoFeatures glimpse = Observe(world, T_world_camera);
+  constexpr std::size_t kSeen = 10;
+  glimpse.keypoints.resize(kSeen);
+  glimpse.u_right.resize(kSeen);
+  glimpse.points.resize(kSeen);
+  glimpse.descriptors = glimpse.descriptors.rowRange(0, kSeen).clone();
+  StereoWorld unmapped;
+  unmapped.Add(RandomPoints(60, 21), 22);
+  const features::StereoFeatures other = Observe(unmapped, Eigen::Isometry3d::Identity());
+  glimpse.keypoints.insert(glimpse.keypoints.end(), other.keypoints.begin(), other.keypoints.end());
+  glimpse.u_right.insert(glimpse.u_right.end(), other.u_right.begin(), other.u_right.end());
+  glimpse.points.insert(glimpse.points.end(), other.points.begin(), other.points.end());
+  cv::vconcat(glimpse.descriptors, other.descriptors, glimpse.descriptors);
+  return glimpse;
+}
+
+TEST(Tracker, AFrameThatShowsTooLittleOfTheMapKeepsItForTheNext) {
+  // Ten of the frame's 600-odd map points: a consensus of 10, below min_inliers_weak (15), but
+  // no chance agreement. The frame is lost; the map stays, and the next frame is tracked in it,
+  // predicted over the 20 ms since the last tracked frame.
+  SlidingCamera camera;
+  const odometry::TrackingResult lost =
+      camera.tracker.Track(0.03, Glimpse(camera.world, SidewaysAndTurned(0.9)));
+  EXPECT_EQ(lost.state, odometry::TrackingState::kLost) << lost.reason;
+  EXPECT_TRUE(lost.map_kept) << lost.reason;
+  EXPECT_FALSE(lost.keyframe.has_value()) << lost.reason;
+  EXPECT_NE(lost.reason.find("map kept"), std::string::npos) << lost.reason;
+
+  const odometry::TrackingResult next =
+      camera.tracker.Track(0.04, Observe(camera.world, SidewaysAndTurned(1.2)));
+  EXPECT_EQ(next.state, odometry::TrackingState::kOk) << next.reason;
+  EXPECT_FALSE(next.keyframe && next.keyframe->starts_new_map) << next.reason;
+  EXPECT_LT((next.T_world_camera.translation() - SidewaysAndTurned(1.2).translation()).norm(),
+            1e-3);
+}
+
+TEST(Tracker, AFrameThatShowsNothingOfTheMapStartsANewPieceAtOnce) {
+  // A kidnapped camera: other points, other descriptors. No consensus at all, so nothing says
+  // the camera still sees the map: a new piece starts with this frame, for relocalization to
+  // join to the map.
+  SlidingCamera camera;
+  StereoWorld elsewhere;
+  elsewhere.Add(RandomPoints(600, 11), 12);
+  const odometry::TrackingResult kidnapped =
+      camera.tracker.Track(0.03, Observe(elsewhere, Eigen::Isometry3d::Identity()));
+  EXPECT_FALSE(kidnapped.map_kept) << kidnapped.reason;
+  ASSERT_TRUE(kidnapped.keyframe.has_value()) << kidnapped.reason;
+  EXPECT_TRUE(kidnapped.keyframe->starts_new_map) << kidnapped.reason;
+}
+
+TEST(Tracker, TheMapIsKeptNoLongerThanMaxTimeLost) {
+  // Glimpses of the map keep it until max_time_lost (0.5 s) has passed since
+  // the last tracked frame (t = 0.02 s); the next starts a new piece.
+  SlidingCamera camera;
+  const features::StereoFeatures glimpse = Glimpse(camera.world, SidewaysAndTurned(0.9));
+  for (const double t : {0.1, 0.3, 0.45}) {
+    const odometry::TrackingResult lost = camera.tracker.Track(t, glimpse);
+    EXPECT_TRUE(lost.map_kept) << t << ": " << lost.reason;
+  }
+  const odometry::TrackingResult late = camera.tracker.Track(0.55, glimpse);
+  EXPECT_FALSE(late.map_kept) << late.reason;
+  ASSERT_TRUE(late.keyframe.has_value()) << late.reason;
+  EXPECT_TRUE(late.keyframe->starts_new_map) << late.reason;
 }
 
 }  // namespace

@@ -39,6 +39,10 @@ struct TrackingResult {
   std::int64_t reference_keyframe = -1;
   Eigen::Isometry3d T_keyframe_camera = Eigen::Isometry3d::Identity();
   std::optional<map::Keyframe> keyframe;  // set if this frame became a keyframe
+  // Lost, but the local map is kept for the next frames (TrackerOptions::max_time_lost): the
+  // odometry goes on where it was if one of them is tracked. T_world_camera is the motion
+  // model's guess, not an estimate.
+  bool map_kept = false;
   // The frame's key points by what tracking made of them, for display (rectified left image):
   // matched to map points and consistent with the pose; matched but rejected as outliers; the
   // others with stereo depth (the new points of a keyframe, candidates otherwise).
@@ -101,6 +105,11 @@ class Tracker {
   // the frame is lost otherwise.
   TrackingResult StartOver(double timestamp, features::StereoFeatures features,
                            const Eigen::Isometry3d& predicted, TrackingResult result);
+  // The exit of a frame that failed against the local map with a RANSAC consensus of
+  // `consensus` points: the map is kept if that still shows the map and the last tracked frame
+  // is within max_time_lost, and StartOver follows otherwise.
+  TrackingResult Lose(double timestamp, features::StereoFeatures features,
+                      const Eigen::Isometry3d& predicted, int consensus, TrackingResult result);
   void Remember(double timestamp, const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
   // The constant-velocity prediction for a frame at `timestamp`.
   Eigen::Isometry3d Predict(double timestamp) const;
