@@ -111,12 +111,14 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
 
   ros::Subscriber keyframe_subscriber_, graph_subscriber_, update_subscriber_;
   ros::Publisher loop_publisher_, map_loaded_publisher_, mode_publisher_;
-  ros::ServiceServer detect_service_, relocalize_service_, save_service_, load_service_,
-      mode_service_;
   // relocalize_frame runs on a queue and thread of its own: the StereoTracker calls it from its
-  // image callback, which must not wait for a free thread of the manager's pool.
+  // image callback, which must not wait for a free thread of the manager's pool. The queue
+  // outlives the server advertised on it: a server destroyed after its queue locks the queue's
+  // freed mutex (boost::lock_error when the manager unloads the nodelet).
   ros::CallbackQueue relocalize_queue_;
   std::unique_ptr<ros::AsyncSpinner> relocalize_spinner_;
+  ros::ServiceServer detect_service_, relocalize_service_, save_service_, load_service_,
+      mode_service_;
 
   std::mutex mutex_;  // the detector: the worker and the service share it
   std::mutex queue_mutex_;
@@ -196,6 +198,7 @@ void LoopDetectorNodelet::onInit() {
 
 LoopDetectorNodelet::~LoopDetectorNodelet() {
   if (relocalize_spinner_) relocalize_spinner_->stop();
+  relocalize_service_.shutdown();  // before its queue
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     stopping_ = true;

@@ -57,6 +57,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
  public:
   ~StereoTrackerNodelet() override {
     if (service_spinner_) service_spinner_->stop();  // before the members its callback uses
+    relocalize_service_.shutdown();                  // before its queue
     {
       std::lock_guard<std::mutex> lock(pair_mutex_);
       stopping_ = true;
@@ -147,9 +148,12 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   ros::Subscriber update_subscriber_, graph_subscriber_;
   ros::Publisher odometry_publisher_, keyframe_publisher_, tracking_image_publisher_;
   ros::ServiceClient relocalize_frame_client_;
-  ros::ServiceServer relocalize_service_;
+  // The queue outlives the server advertised on it: a server destroyed after its queue locks
+  // the queue's freed mutex (the manager aborted with boost::lock_error in about a third of the
+  // unloads at the end of a launch).
   ros::CallbackQueue service_queue_;
   std::unique_ptr<ros::AsyncSpinner> service_spinner_;
+  ros::ServiceServer relocalize_service_;
 
   // Recovery (mapping): set by a loss while there is a map, cleared when a frame is found in it.
   // Localization: relocalized until found, then at every keyframe; each success gives map ->

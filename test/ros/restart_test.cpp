@@ -100,6 +100,10 @@ TEST(Restart, BackendUnloadedAndLoadedAgainWhileTheBagPlays) {
         message.find("the keyframes before it are not in this Backend's map") != std::string::npos;
   }
   EXPECT_TRUE(said_what_it_lost) << ReadTextFile(temp.path() + "/roslaunch.log");
+  // Unloading at the end aborts nothing (see load_test).
+  EXPECT_EQ(ReadTextFile(temp.path() + "/roslaunch.log").find("terminate called"),
+            std::string::npos)
+      << ReadTextFile(temp.path() + "/roslaunch.log");
 }
 
 }  // namespace
