@@ -112,6 +112,10 @@ void StereoSlam::Localize(const FrontEndOutput& output, FrameRecord* record) {
   // A loss that starts a new piece breaks the odometry: the old map -> odom no longer holds. A
   // lost frame whose map the tracker kept has no pose, but the odometry goes on unbroken.
   if (result.state == odometry::TrackingState::kLost && !result.map_kept) localized_ = false;
+  if (result.map_kept) {
+    record->on_map = false;  // no pose to give, in the map or in odom
+    return;
+  }
   const bool attempt =
       localized_ ? result.keyframe.has_value()
                  : frames_off_map_++ % relocalization_->options().attempt_every_n_frames == 0;
