@@ -642,9 +642,10 @@ void StereoTrackerNodelet::RelocalizeIfDue(const ros::Time& stamp,
   std::string failure;
   if (result.state == odometry::TrackingState::kLost && !result.keyframe) {
     // No pose of its own (only the motion model's prediction): nothing to relocalize from.
-    failure = result.map_kept
-                  ? "this frame could not be tracked (the tracker searches the next ones in its map)"
-                  : "tracking is lost and the frame has too few stereo points";
+    failure =
+        result.map_kept
+            ? "this frame could not be tracked (the tracker searches the next ones in its map)"
+            : "tracking is lost and the frame has too few stereo points";
   } else {
     map::Keyframe frame;
     frame.timestamp = stamp.toSec();

@@ -290,8 +290,9 @@ TrackingResult Tracker::Lose(double timestamp, features::StereoFeatures features
   result.T_world_camera = predicted;
   result.map_kept = true;
   char kept[96];
-  std::snprintf(kept, sizeof(kept), "; map kept (%.2f s since the last tracked frame, at most %.2f)",
-                since_tracked, options_.max_time_lost);
+  std::snprintf(kept, sizeof(kept),
+                "; map kept (%.2f s since the last tracked frame, at most %.2f)", since_tracked,
+                options_.max_time_lost);
   result.reason += kept;
   return result;
 }

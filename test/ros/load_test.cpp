@@ -151,9 +151,10 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   // Which pairs are skipped depends on the machine's load, and so does the trajectory: six runs
   // at 5x on the faster machine gave 2.0 to 13.9 mm against the 1x run over 0.39 m, 3x on the
   // slower one 13.0 and 16.1 mm, 1.8 to 5.3 mm in four runs with the descriptor search (one of
-  // them in three pieces), 2.8 to 6.5 mm in three with the map kept (one piece each). Each piece is aligned on its own (WorstPieceAte): a loss is
-  // counted above, not twice. 2.5 cm is above that spread and still far below a piece that
-  // drifted or was tracked against the wrong place (tens of centimetres).
+  // them in three pieces), 2.8 to 6.5 mm in three with the map kept (one piece each). Each piece is
+  // aligned on its own (WorstPieceAte): a loss is counted above, not twice. 2.5 cm is above that
+  // spread and still far below a piece that drifted or was tracked against the wrong place (tens of
+  // centimetres).
   EXPECT_LT(fast_ate, 0.025);
 
   const GraphRun split = PlayBag(bag, "rate:=1 standalone:=true", temp.path() + "/standalone.log");

@@ -141,7 +141,8 @@ TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
 // A frame that still shows the map, too poorly to trust a pose (motion blur leaves a few of its
 // corners): ten of the key points the camera at `T_world_camera` sees, and sixty of points the
 // map does not hold, enough stereo points for a new map.
-features::StereoFeatures Glimpse(const StereoWorld& world, const Eigen::Isometry3d& T_world_camera) {
+features::StereoFeatures Glimpse(const StereoWorld& world,
+                                 const Eigen::Isometry3d& T_world_camera) {
   features::StereoFeatures glimpse = Observe(world, T_world_camera);
   constexpr std::size_t kSeen = 10;
   glimpse.keypoints.resize(kSeen);
