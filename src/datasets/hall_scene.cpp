@@ -175,6 +175,29 @@ std::vector<int> HallScene::ObstaclesInFront(const Eigen::Matrix3f& world_to_cam
   return in_front;
 }
 
+std::vector<int> HallScene::ObstaclesInCone(const Eigen::Vector3f& origin,
+                                            const Eigen::Vector3f& axis, float half_angle) const {
+  // A ray within the cone hits a sphere only if the angle from the axis to the sphere's centre
+  // is at most the cone's half-angle plus the angle the sphere subtends (triangle inequality
+  // on angles). The slack covers rounding: Trace's float slab test may count a ray that misses
+  // a box by a few ulps as a hit, and 1 mrad is a centimetre at 10 m, far beyond that.
+  constexpr double kSlack = 1e-3;  // [rad]
+  const Eigen::Vector3d apex = origin.cast<double>(), direction = axis.cast<double>().normalized();
+  std::vector<int> in_cone;
+  for (std::size_t b = 1; b < boxes_.size(); ++b) {
+    const Eigen::Vector3d min = boxes_[b].min.cast<double>(), max = boxes_[b].max.cast<double>();
+    const double radius = 0.5 * (max - min).norm();
+    const Eigen::Vector3d to_centre = 0.5 * (min + max) - apex;
+    const double distance = to_centre.norm();
+    const bool inside = distance <= radius;
+    if (inside || std::acos(std::clamp(to_centre.dot(direction) / distance, -1.0, 1.0)) <=
+                      half_angle + std::asin(radius / distance) + kSlack) {
+      in_cone.push_back(static_cast<int>(b));
+    }
+  }
+  return in_cone;
+}
+
 float HallScene::Trace(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
                        float pixel_angle, const std::vector<int>* obstacles) const {
   const Eigen::Vector3f inverse = direction.cwiseInverse();

@@ -24,8 +24,22 @@ class CameraRenderer {
                  bool parallel = true) const;
 
  private:
+  // The rays of a square of kTileSize x kTileSize pixels lie within `half_angle` of `axis`
+  // (camera frame): only the obstacles in that cone need tracing for them.
+  struct Tile {
+    Eigen::Vector3f axis;
+    float half_angle;
+  };
+  static constexpr int kTileSize = 16;
+
+  const Eigen::Vector3f& Ray(int u, int v) const {
+    return rays_[static_cast<std::size_t>(v) * size_.width + u];
+  }
+
   cv::Size size_;
   std::vector<Eigen::Vector3f> rays_;  // unit directions in the camera frame, row-major
+  int tile_columns_;
+  std::vector<Tile> tiles_;  // row-major
   float pixel_angle_;
 };
 
