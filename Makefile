@@ -86,12 +86,14 @@ vocabulary: deps $(WS)/build/Makefile
 # own master, and the load and restart tests need the cores to themselves), the unit tests
 # (gtest, no ROS, no timing) JOBS at a time (two: 380 s against 493 s one at a time, on two
 # cores), then the sanitizer build's unit tests (ASan, LSan, UBSan), two at a time; and closes
-# with one line "tests: N passed, N failed, N skipped" over all of them.
+# with one line "tests: N passed, N failed, N skipped" over all of them. The rendered sequences
+# the rostests share with the unit tests (SharedSyntheticSequence, 1.7 GB) are removed after.
 test: build sanitize-build
 	$(CMAKE_BUILD) -j$(JOBS) tests
 	rm -rf $(WS)/build/test_results
 	-$(CMAKE_BUILD) -j1 run_tests_stereo_fabmap_slam_rostest
 	-$(CMAKE_BUILD) -j$(JOBS) run_tests_stereo_fabmap_slam_gtest
+	rm -rf $(WS)/build/test_sequences
 	-bash scripts/sanitizer_tests.sh $(SANITIZE)/devel/lib/stereo_fabmap_slam \
 	  $(WS)/build/test_results/sanitizers
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results

@@ -1,7 +1,10 @@
 #include "test_support.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -74,6 +77,63 @@ int RunCommand(const std::string& command, std::string* output) {
     output->append(buffer.data(), n);
   const int status = pclose(pipe);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+namespace {
+
+// Releases an flock(2) lock (and closes its file) when it goes out of scope.
+class FileLock {
+ public:
+  explicit FileLock(const std::string& path)
+      : descriptor_(open(path.c_str(), O_CREAT | O_RDWR, 0644)) {
+    if (descriptor_ < 0 || flock(descriptor_, LOCK_EX) != 0) {
+      throw std::runtime_error("cannot lock " + path);
+    }
+  }
+  ~FileLock() {
+    flock(descriptor_, LOCK_UN);
+    close(descriptor_);
+  }
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  int descriptor_;
+};
+
+// Which build of the renderer wrote a sequence: the program's size and modification time. The
+// build relinks the program whenever a library it links (the renderer's) changes.
+std::string ProgramFingerprint(const std::string& program) {
+  const auto stamp = std::filesystem::last_write_time(program).time_since_epoch().count();
+  return std::to_string(std::filesystem::file_size(program)) + " " + std::to_string(stamp) + "\n";
+}
+
+}  // namespace
+
+std::string SharedSyntheticSequence(const std::string& make_synthetic_sequence,
+                                    const std::string& route, int seconds, int seed) {
+  const std::string cache = STEREO_FABMAP_SLAM_TEST_CACHE;
+  const std::string name = route + "-" + std::to_string(seconds) + "s-seed" + std::to_string(seed);
+  const std::string folder = cache + "/" + name;
+  // Written last: a folder without it (a render that was interrupted) is rendered again.
+  const std::string fingerprint_file = folder + "/rendered_by";
+  std::filesystem::create_directories(cache);
+  const FileLock lock(cache + "/" + name + ".lock");
+  const std::string fingerprint = ProgramFingerprint(make_synthetic_sequence);
+  if (std::filesystem::exists(fingerprint_file) && ReadTextFile(fingerprint_file) == fingerprint) {
+    return folder;
+  }
+  std::filesystem::remove_all(folder);
+  std::string output;
+  if (RunCommand(make_synthetic_sequence + " --output " + folder + " --route " + route +
+                     " --seconds " + std::to_string(seconds) + " --seed " + std::to_string(seed) +
+                     " 2>&1",
+                 &output) != 0) {
+    ADD_FAILURE() << output;
+    return "";
+  }
+  WriteTextFile(fingerprint_file, fingerprint);
+  return folder;
 }
 
 double JsonNumber(const std::string& json, const std::string& key) {

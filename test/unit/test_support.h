@@ -31,6 +31,15 @@ bool CopyTree(const std::string& from, const std::string& to);
 // Runs a shell command, returns its exit status and fills *output with stdout.
 int RunCommand(const std::string& command, std::string* output);
 
+// The folder of a sequence that `make_synthetic_sequence` (the program at that path) renders,
+// with its bag, for `route`, `seconds` and `seed`. Rendering is most of the time of the tests
+// that need one, so tests that ask for the same sequence share it: it is kept in the build
+// folder (STEREO_FABMAP_SLAM_TEST_CACHE), rendered by the first test that asks (the others wait
+// on a file lock), and rendered again when the program has been rebuilt since. Tests must only
+// read it. Fails the calling test and returns "" if rendering fails.
+std::string SharedSyntheticSequence(const std::string& make_synthetic_sequence,
+                                    const std::string& route, int seconds, int seed);
+
 // The number after "key": in a one-line JSON object (run_dataset's summary.json); records a test
 // failure and returns -1 if the key is missing.
 double JsonNumber(const std::string& json, const std::string& key);
