@@ -156,25 +156,6 @@ float HallScene::Shade(const Box& box, int face, const Eigen::Vector3f& point, f
                                    (v - row) * full.rows * scale - 0.5f);
 }
 
-std::vector<int> HallScene::ObstaclesInFront(const Eigen::Matrix3f& world_to_camera_rotation,
-                                             const Eigen::Vector3f& camera_position) const {
-  std::vector<int> in_front;
-  const Eigen::RowVector3f forward = world_to_camera_rotation.row(2);
-  for (std::size_t b = 1; b < boxes_.size(); ++b) {
-    const Box& box = boxes_[b];
-    for (int corner = 0; corner < 8; ++corner) {
-      const Eigen::Vector3f p((corner & 1) ? box.max.x() : box.min.x(),
-                              (corner & 2) ? box.max.y() : box.min.y(),
-                              (corner & 4) ? box.max.z() : box.min.z());
-      if (forward.dot(p - camera_position) > 0.0f) {
-        in_front.push_back(static_cast<int>(b));
-        break;
-      }
-    }
-  }
-  return in_front;
-}
-
 std::vector<int> HallScene::ObstaclesInCone(const Eigen::Vector3f& origin,
                                             const Eigen::Vector3f& axis, float half_angle) const {
   // A ray within the cone hits a sphere only if the angle from the axis to the sphere's centre

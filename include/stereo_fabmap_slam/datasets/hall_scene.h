@@ -44,13 +44,10 @@ class HallScene {
 
   // Grey level (0-255) seen along a ray from `origin` in the unit `direction`; `pixel_angle` is the
   // angle a pixel spans [rad], for choosing the texture resolution. 0 if the ray leaves the hall.
-  // `obstacles`: indices into boxes() that the ray may hit (e.g. those in front of the camera);
+  // `obstacles`: indices into boxes() that the ray may hit (e.g. ObstaclesInCone's);
   // all obstacles if null.
   float Trace(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float pixel_angle,
               const std::vector<int>* obstacles = nullptr) const;
-  // Obstacles not entirely behind a camera at T_world_camera (z <= 0 for all corners).
-  std::vector<int> ObstaclesInFront(const Eigen::Matrix3f& world_to_camera_rotation,
-                                    const Eigen::Vector3f& camera_position) const;
   // Obstacles that a ray from `origin` within `half_angle` [rad] of the unit `axis` may hit, in
   // the order of boxes(): those whose bounding sphere meets the cone. Every obstacle left out is
   // missed by every such ray, so tracing with this list gives what tracing with all does.
