@@ -68,18 +68,14 @@ roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$RATE" cal
 launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 deadline=$((SECONDS + 60 + 3 * duration))
-until rosnode list 2> /dev/null | grep -q '^/bag_player$'; do
+until bag_player_running "$launch_pid"; do
   kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
     echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
   sleep 0.5
 done
-# The player is gone when three queries in a row (1.5 s) do not list it: a busy master can
-# miss one.
-missing=0
-while [ $missing -lt 3 ]; do
+while bag_player_running "$launch_pid"; do
   kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
     echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
-  if rosnode list 2> /dev/null | grep -q '^/bag_player$'; then missing=0; else missing=$((missing + 1)); fi
   sleep 0.5
 done
 graph_seconds=$((SECONDS - graph_start))

@@ -3,6 +3,7 @@
 #   source scripts/private_master.sh; start_private_master LOG_DIR
 # sets ROS_MASTER_URI and ROS_HOME (logs in LOG_DIR), starts roscore, waits until it answers
 # and leaves its pid in private_master_pid for the caller's cleanup.
+# Also defines bag_player_running LAUNCH_PID, for waiting on the bag a roslaunch plays.
 start_private_master() {
   local log_dir=$1 port
   set +u; source build/ws/devel/setup.bash; set -u  # setup files read unset variables
@@ -11,4 +12,12 @@ start_private_master() {
   roscore -p "$port" > "$log_dir/roscore.log" 2>&1 &
   private_master_pid=$!
   until rosparam list > /dev/null 2>&1; do sleep 0.2; done
+}
+
+# Whether the bag player of the roslaunch with pid LAUNCH_PID is running, asked of the process
+# table (the player is roslaunch's child) rather than of the master: `rosnode list` can go
+# unanswered for seconds while the disk writes out a bag rendered just before, and three misses
+# in a row once ended the demo's wait 19 s into a 40 s bag.
+bag_player_running() {
+  pgrep -P "$1" -f '__name:=bag_player' > /dev/null
 }

@@ -61,15 +61,13 @@ launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 deadline=$((SECONDS + 90 + 3 * duration))
 echo "playing $bag ($duration s) with rviz; logs in $log_dir"
-until rosnode list 2> /dev/null | grep -q '^/bag_player$'; do
+until bag_player_running "$launch_pid"; do
   [ $SECONDS -lt $deadline ] && kill -0 "$launch_pid" 2> /dev/null || {
     echo "$0: the ROS graph failed; see $log_dir/roslaunch.log" >&2; exit 1; }
   sleep 0.5
 done
-missing=0
-while [ $missing -lt 3 ]; do
+while bag_player_running "$launch_pid"; do
   [ $SECONDS -lt $deadline ] || { echo "$0: the bag did not end in time" >&2; exit 1; }
-  if rosnode list 2> /dev/null | grep -q '^/bag_player$'; then missing=0; else missing=$((missing + 1)); fi
   sleep 0.5
 done
 sleep 4  # the Visualizer's last refresh and rviz's next frames
