@@ -45,8 +45,8 @@ for rate in $RATES; do
   roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$rate" standalone:=true \
     visualizer:=false exit_at_end:=false delay:=4 > "$log" 2>&1 &
   launch_pid=$!
-  until bag_player_running "$launch_pid"; do sleep 0.3; done
-  while bag_player_running "$launch_pid"; do sleep 0.3; done
+  until launched_node_running "$launch_pid" bag_player; do sleep 0.3; done
+  while launched_node_running "$launch_pid" bag_player; do sleep 0.3; done
   sleep 3  # the Backend's and LoopDetector's last keyframes
   playing=$(/usr/bin/python3 -c "print($images / $rate)")
   odometry=$(grep -c '^[0-9]' "$OUT/odometry_$rate.csv" || true)

@@ -68,12 +68,12 @@ roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$RATE" cal
 launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 deadline=$((SECONDS + 60 + 3 * duration))
-until bag_player_running "$launch_pid"; do
+until launched_node_running "$launch_pid" bag_player; do
   kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
     echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
   sleep 0.5
 done
-while bag_player_running "$launch_pid"; do
+while launched_node_running "$launch_pid" bag_player; do
   kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
     echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
   sleep 0.5

@@ -3,7 +3,7 @@
 #   source scripts/private_master.sh; start_private_master LOG_DIR
 # sets ROS_MASTER_URI and ROS_HOME (logs in LOG_DIR), starts roscore, waits until it answers
 # and leaves its pid in private_master_pid for the caller's cleanup.
-# Also defines bag_player_running LAUNCH_PID, for waiting on the bag a roslaunch plays.
+# Also defines launched_node_running LAUNCH_PID NAME (e.g. waiting for the bag player to end).
 start_private_master() {
   local log_dir=$1 port
   set +u; source build/ws/devel/setup.bash; set -u  # setup files read unset variables
@@ -14,10 +14,10 @@ start_private_master() {
   until rosparam list > /dev/null 2>&1; do sleep 0.2; done
 }
 
-# Whether the bag player of the roslaunch with pid LAUNCH_PID is running, asked of the process
-# table (the player is roslaunch's child) rather than of the master: `rosnode list` can go
+# Whether the node NAME of the roslaunch with pid LAUNCH_PID runs, asked of the process table
+# (roslaunch starts its nodes as its children) rather than of the master: `rosnode list` can go
 # unanswered for seconds while the disk writes out a bag rendered just before, and three misses
-# in a row once ended the demo's wait 19 s into a 40 s bag.
-bag_player_running() {
-  pgrep -P "$1" -f '__name:=bag_player' > /dev/null
+# in a row once ended the demo's wait for its bag 19 s into 40.
+launched_node_running() {
+  pgrep -P "$1" -f "__name:=$2( |\$)" > /dev/null
 }

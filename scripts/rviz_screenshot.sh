@@ -61,18 +61,18 @@ launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 deadline=$((SECONDS + 90 + 3 * duration))
 echo "playing $bag ($duration s) with rviz; logs in $log_dir"
-until bag_player_running "$launch_pid"; do
+until launched_node_running "$launch_pid" bag_player; do
   [ $SECONDS -lt $deadline ] && kill -0 "$launch_pid" 2> /dev/null || {
     echo "$0: the ROS graph failed; see $log_dir/roslaunch.log" >&2; exit 1; }
   sleep 0.5
 done
-while bag_player_running "$launch_pid"; do
+while launched_node_running "$launch_pid" bag_player; do
   [ $SECONDS -lt $deadline ] || { echo "$0: the bag did not end in time" >&2; exit 1; }
   sleep 0.5
 done
 sleep 4  # the Visualizer's last refresh and rviz's next frames
 # rviz under Xvfb's software OpenGL now and then aborts at start: a black picture is no picture.
-if ! rosnode list 2> /dev/null | grep -q '^/rviz$'; then
+if ! launched_node_running "$launch_pid" rviz; then
   echo "$0: rviz is not running (see $log_dir/log); try again" >&2
   exit 3
 fi
