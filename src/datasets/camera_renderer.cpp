@@ -40,8 +40,7 @@ CameraRenderer::CameraRenderer(const camera::CameraCalibration& camera)
       for (int v = pixels.y; v < pixels.br().y; ++v) {
         for (int u = pixels.x; u < pixels.br().x; ++u) {
           half_angle =
-              std::max(half_angle,
-                       std::acos(std::min(1.0, axis.dot(Ray(u, v).cast<double>().normalized()))));
+              std::max(half_angle, std::acos(std::min(1.0, axis.dot(Ray(u, v).cast<double>()))));
         }
       }
       tiles_.push_back({axis.cast<float>(), static_cast<float>(half_angle)});

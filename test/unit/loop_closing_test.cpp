@@ -33,8 +33,9 @@ Eigen::Vector3d PositionAt(const evaluation::Trajectory& truth, double time) {
 // Maps `seconds` of a rendered route (shared with the rostests, which play the same sequence
 // through the nodelets) with run_dataset into temp/run, as a user would; returns its folder and
 // summary.json (empty, and the test fails, if a program failed).
-std::pair<std::string, std::string> RenderAndRun(const TemporaryDirectory& temp,
-                                                 const std::string& route, int seconds, int seed) {
+std::pair<std::string, std::string> MapRenderedRoute(const TemporaryDirectory& temp,
+                                                     const std::string& route, int seconds,
+                                                     int seed) {
   const std::string sequence =
       SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, route, seconds, seed);
   std::string output;
@@ -50,7 +51,7 @@ std::pair<std::string, std::string> RenderAndRun(const TemporaryDirectory& temp,
 TEST(LoopClosing, RenderedLoopIsClosedWithoutFalseLoops) {
   TemporaryDirectory temp;
   // 34 s of the "loop" route: one lap, back past the start from about 26 s on.
-  const auto [sequence, summary] = RenderAndRun(temp, "loop", 34, 1);
+  const auto [sequence, summary] = MapRenderedRoute(temp, "loop", 34, 1);
   ASSERT_FALSE(summary.empty());
   RecordProperty("summary", summary);
   EXPECT_GE(JsonNumber(summary, "loops_accepted"), 1);
@@ -85,7 +86,7 @@ TEST(Relocalization, KidnappedCameraIsFoundAgainAndTheTrajectoryStaysOnePiece) {
   TemporaryDirectory temp;
   // The kidnap route: at 60 % of its 40 s the camera jumps back half a lap, to a place it saw
   // some 13 s before. Tracking fails on the jump; the odometry starts a new piece of map.
-  const std::string summary = RenderAndRun(temp, "kidnap", 40, 2).second;
+  const std::string summary = MapRenderedRoute(temp, "kidnap", 40, 2).second;
   ASSERT_FALSE(summary.empty());
   RecordProperty("summary", summary);
   EXPECT_GE(JsonNumber(summary, "relocalizations"), 1);
