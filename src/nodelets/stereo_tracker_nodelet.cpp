@@ -46,6 +46,7 @@
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
+#include "stereo_fabmap_slam/odometry/frame_queue.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 #include "stereo_fabmap_slam/relocalization/relocalization_options.h"
@@ -81,9 +82,17 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
                      const Eigen::Isometry3d& T_base_body);
   void OnCameraInfo(const sensor_msgs::CameraInfoConstPtr& left,
                     const sensor_msgs::CameraInfoConstPtr& right);
-  // The synchroniser's callback: hands the pair to the worker, or drops it when the worker is
-  // still busy with the one before (whole pairs only, the newest first).
+  // The synchroniser's callback: queues the pair for the worker, or drops it when the queue is
+  // full (whole pairs only, the newest first).
   void OnImages(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
+  // Skips counted since the last report, taken for reporting once a second. Call with
+  // pair_mutex_; warn (Warn) without it.
+  struct SkipReport {
+    std::uint64_t since_last = 0, in_all = 0;
+    double frame_ms = 0;
+  };
+  SkipReport TakeSkipReport(const ros::WallTime& now);
+  void Warn(const SkipReport& report);
   // The worker thread: tracks pairs one at a time.
   void Work();
   void ProcessPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
@@ -122,14 +131,16 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   int frozen_frames_ = 0;
   int frames_lost_with_map_kept_ = 0;  // lost in a row, the tracker's map kept
 
-  // Between the synchroniser and the worker: at most one pair waits while one is tracked, so
-  // that a tracker slower than the camera (a bag played fast, a busy machine) skips pairs
-  // instead of falling ever further behind, and the subscribers' queues never overflow (which
-  // would drop a left image without its right). Skipped pairs are counted and reported once a
-  // second.
+  // Between the synchroniser and the worker: a bounded queue (tracker/queued_pairs), so that a
+  // tracker slower than the camera (a bag played fast, a busy machine) skips pairs instead of
+  // falling ever further behind, and the subscribers' queues never overflow (which would drop a
+  // left image without its right). The worker takes pairs so that the gaps between tracked
+  // pairs stay short (odometry::FrameQueue). Skipped pairs, dropped from a full queue or passed
+  // over, are counted and reported once a second.
+  using ImagePair = std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>;
   std::mutex pair_mutex_;
   std::condition_variable pair_ready_;
-  std::optional<std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>> waiting_pair_;
+  std::optional<odometry::FrameQueue<ImagePair>> waiting_pairs_;  // set in onInit
   bool stopping_ = false;
   std::uint64_t skipped_pairs_ = 0, skipped_reported_ = 0;
   ros::WallTime last_skip_report_;
@@ -225,6 +236,8 @@ void StereoTrackerNodelet::onInit() {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
+  waiting_pairs_.emplace(static_cast<std::size_t>(options_.tracker.queued_pairs),
+                         options_.tracker.catch_up_gap);
   // REP-105 names, as rtabmap_ros and slam_toolbox default to.
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
   base_frame_ = private_node.param<std::string>("base_frame", "base_link");
@@ -431,43 +444,68 @@ void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_messa
                                     const sensor_msgs::ImageConstPtr& right_message) {
   ++pairs_;
   if (dropout_reported_.exchange(false)) NODELET_INFO("stereo pairs arrive again");
-  std::uint64_t skipped_since_report = 0;
-  double frame_ms = 0;
+  SkipReport report;
   {
     std::lock_guard<std::mutex> lock(pair_mutex_);
-    if (waiting_pair_) {
-      ++skipped_pairs_;  // the worker has not taken the last one yet: this one is dropped
-    } else {
-      waiting_pair_.emplace(left_message, right_message);
+    // A full queue drops the newest pair: what waits stays a contiguous stretch of the stream.
+    if (!waiting_pairs_->Push(left_message->header.stamp.toSec(),
+                              ImagePair(left_message, right_message))) {
+      ++skipped_pairs_;
     }
-    const ros::WallTime now = ros::WallTime::now();
-    if (skipped_pairs_ > skipped_reported_ && (now - last_skip_report_).toSec() >= 1.0) {
-      skipped_since_report = skipped_pairs_ - skipped_reported_;
-      skipped_reported_ = skipped_pairs_;
-      last_skip_report_ = now;
-      frame_ms = last_frame_ms_;
-    }
+    report = TakeSkipReport(ros::WallTime::now());
   }
   pair_ready_.notify_one();
-  if (skipped_since_report > 0) {
-    NODELET_WARN(
-        "skipped %lu stereo pair(s) in the last second: the tracker was still busy "
-        "(%.0f ms for its last pair); %lu skipped in all",
-        static_cast<unsigned long>(skipped_since_report), frame_ms,
-        static_cast<unsigned long>(skipped_reported_));
+  Warn(report);
+}
+
+StereoTrackerNodelet::SkipReport StereoTrackerNodelet::TakeSkipReport(const ros::WallTime& now) {
+  SkipReport report;
+  if (skipped_pairs_ > skipped_reported_ && (now - last_skip_report_).toSec() >= 1.0) {
+    report.since_last = skipped_pairs_ - skipped_reported_;
+    report.in_all = skipped_pairs_;
+    report.frame_ms = last_frame_ms_;
+    skipped_reported_ = skipped_pairs_;
+    last_skip_report_ = now;
   }
+  return report;
+}
+
+void StereoTrackerNodelet::Warn(const SkipReport& report) {
+  if (report.since_last == 0) return;
+  NODELET_WARN(
+      "skipped %lu stereo pair(s) in the last second: the tracker was still busy "
+      "(%.0f ms for its last pair); %lu skipped in all",
+      static_cast<unsigned long>(report.since_last), report.frame_ms,
+      static_cast<unsigned long>(report.in_all));
 }
 
 void StereoTrackerNodelet::Work() {
   while (true) {
-    std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr> pair;
+    ImagePair pair;
+    SkipReport report;
     {
       std::unique_lock<std::mutex> lock(pair_mutex_);
-      pair_ready_.wait(lock, [&] { return stopping_ || waiting_pair_.has_value(); });
+      // Idle with skips not yet reported (the stream ended or paused): report them when their
+      // second is up rather than never.
+      while (!stopping_ && waiting_pairs_->empty()) {
+        if (skipped_pairs_ == skipped_reported_) {
+          pair_ready_.wait(lock);
+          continue;
+        }
+        const double wait = 1.0 - (ros::WallTime::now() - last_skip_report_).toSec();
+        if (wait > 0) pair_ready_.wait_for(lock, std::chrono::duration<double>(wait));
+        report = TakeSkipReport(ros::WallTime::now());
+        if (report.since_last > 0) break;
+      }
       if (stopping_) return;
-      pair = std::move(*waiting_pair_);
-      waiting_pair_.reset();
+      if (!waiting_pairs_->empty()) {
+        odometry::FrameQueue<ImagePair>::Taken taken = waiting_pairs_->Take();
+        skipped_pairs_ += taken.skipped;
+        pair = std::move(taken.frame);
+      }
     }
+    Warn(report);
+    if (!pair.first) continue;
     const double start = SteadyMilliseconds();
     ProcessPair(pair.first, pair.second);
     std::lock_guard<std::mutex> lock(pair_mutex_);

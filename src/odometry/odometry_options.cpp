@@ -55,6 +55,8 @@ void TrackerOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("max_prediction_gap", &max_prediction_gap);
   visitor.Visit("max_time_lost", &max_time_lost);
   visitor.Visit("parallel", &parallel);
+  visitor.Visit("queued_pairs", &queued_pairs);
+  visitor.Visit("catch_up_gap", &catch_up_gap);
   visitor.Visit("refinement_sigma", &refinement.sigma);
   visitor.Visit("refinement_rounds", &refinement.rounds);
   visitor.Visit("refinement_iterations", &refinement.iterations);
@@ -76,6 +78,8 @@ void TrackerOptions::Validate() const {
   if (!(max_prediction_gap > 0))
     throw std::invalid_argument("tracker.max_prediction_gap must be > 0");
   if (!(max_time_lost >= 0)) throw std::invalid_argument("tracker.max_time_lost must be >= 0");
+  if (queued_pairs < 1) throw std::invalid_argument("tracker.queued_pairs must be >= 1");
+  if (!(catch_up_gap >= 0)) throw std::invalid_argument("tracker.catch_up_gap must be >= 0");
   if (min_map_points < 3 || local_keyframes < 1) {
     throw std::invalid_argument("tracker: min_map_points >= 3 and local_keyframes >= 1");
   }

@@ -61,6 +61,16 @@ struct TrackerOptions {
   // state is the same idea.
   double max_time_lost = 0.5;
   bool parallel = true;  // search map points on two threads
+  // The StereoTracker nodelet's FrameQueue (odometry/frame_queue.h), for a tracker slower than
+  // the camera; the offline runner tracks every frame. 16 pairs absorb a tracker 4 times slower
+  // than the camera, and at 20 Hz less than a second of images (12 MB of EuRoC's).
+  int queued_pairs = 16;
+  // [s] Catching up, the tracker skips queued pairs but leaves at most this between the pairs
+  // it tracks (more only when the backlog is long). On MH01, tracking every 2nd pair (0.1 s)
+  // needed the search by descriptor once in 100 frames, every 3rd 5 times in 67, every 5th 10
+  // in 40: the motion model predicts well up to about 0.1 s at the speeds of a MAV or a
+  // hand-held camera (docs/benchmarks.md, issue 14, third measurement).
+  double catch_up_gap = 0.1;
   PoseRefinementOptions refinement;
 
   void Visit(io::OptionVisitor& visitor);
