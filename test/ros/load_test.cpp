@@ -5,7 +5,10 @@
 //   on MH01 7.35 ms on the one this test was first measured on, 12.8 ms on a later one), and 5x
 //   there, which skipped a third of the pairs, skipped 57 % on the slower one and lost the
 //   track (86 of 200 pairs with odometry, 24 keyframes against 30). 3x offers the slower machine
-//   the load 5x offered the faster; issue 14's own 5x figures are in docs/benchmarks.md;
+//   the load 5x offered the faster; issue 14's own 5x figures are in docs/benchmarks.md. Since
+//   the tracker's queue (odometry::FrameQueue) replaced the one-pair slot, 3x here gets odometry
+//   for 187 and 193 of 200 pairs (the slot: 120-152) and 29 and 31 keyframes against 30; 4x 25,
+//   26 and 29 keyframes, 5x 23-26 (and the track kept in 24 of 24 launch runs): under 85 %;
 // - every nodelet standalone (its own process, messages serialised) gives the trajectory of
 //   the single manager.
 #include <algorithm>
@@ -115,15 +118,20 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   // The machines CI runs on are shared, and a stalled core makes single pairs take 45-57 ms
   // against 50 ms between pairs: inside a full make test a run skipped 7 (193 with odometry),
   // the standalone run below 16 (184). Skips are whole pairs and reported, as they must be; 90 %
-  // with odometry still tells a graph that keeps up from one that does not (3x: 60-76 %).
+  // with odometry still tells a graph that keeps up from one that does not (3x with the slot the
+  // queue replaced: 60-76 %).
   EXPECT_GE(real_time.odometry.size(), 180u) << real_time.log;
 
   const GraphRun fast = PlayBag(bag, "rate:=3", temp.path() + "/3x.log");
   RecordProperty("odometry_fast", static_cast<int>(fast.odometry.size()));
   RecordProperty("keyframes_fast", fast.keyframes);
-  EXPECT_NE(fast.log.find("stereo pair(s) in the last second: the tracker was still busy"),
-            std::string::npos)
-      << fast.log;
+  // Skipped pairs are reported. The queue absorbs the tracker's slow frames, and this machine
+  // skipped 7 and 13 pairs at 3x; one twice as fast may skip none, and then has nothing to say.
+  if (fast.odometry.size() < real_time.odometry.size()) {
+    EXPECT_NE(fast.log.find("stereo pair(s) in the last second: the tracker was still busy"),
+              std::string::npos)
+        << fast.log;
+  }
   // Skipping a third of the pairs widens the gaps the motion model bridges, and the tracker
   // then finds the frame by descriptor. Where the bag ends, the camera passes close over
   // blurred, repetitive pallets (at 1x a keyframe every 2-3 frames): there about half the runs
@@ -142,7 +150,8 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   EXPECT_EQ(fast.log.find("do not synchronise"), std::string::npos) << "never half a pair";
   // Fewer frames give the keyframe policy fewer moments to decide: a keyframe due between two
   // processed frames comes at the later one, so a run that skipped a third of its pairs makes a
-  // few keyframes less (measured: 28 to 30 against 31 at 1x, by how busy the machine was).
+  // few keyframes less (measured: 28 to 30 against 31 at 1x, by how busy the machine was; with
+  // the queue, 29 and 31 against 30).
   // Fewer than 85 % would leave gaps in the map.
   EXPECT_GE(fast.keyframes * 100, real_time.keyframes * 85);
   RecordProperty("pieces_fast", static_cast<int>(fast.new_map_stamps.size() + 1));
