@@ -8,7 +8,8 @@
 //   the load 5x offered the faster; issue 14's own 5x figures are in docs/benchmarks.md. Since
 //   the tracker's queue (odometry::FrameQueue) replaced the one-pair slot, 3x here gets odometry
 //   for 187 and 193 of 200 pairs (the slot: 120-152) and 29 and 31 keyframes against 30; 4x 25,
-//   26 and 29 keyframes, 5x 23-26 (and the track kept in 24 of 24 launch runs): under 85 %;
+//   26 and 29 keyframes, 5x 23-26 (and the track kept in 24 of 24 launch runs): down to 83 %
+//   at 4x and 77 % at 5x, under this test's 85 %;
 // - every nodelet standalone (its own process, messages serialised) gives the trajectory of
 //   the single manager.
 #include <algorithm>
@@ -126,11 +127,12 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   RecordProperty("odometry_fast", static_cast<int>(fast.odometry.size()));
   RecordProperty("keyframes_fast", fast.keyframes);
   // Skipped pairs are reported. The queue absorbs the tracker's slow frames, and this machine
-  // skipped 7 and 13 pairs at 3x; one twice as fast may skip none, and then has nothing to say.
-  if (fast.odometry.size() < real_time.odometry.size()) {
-    EXPECT_NE(fast.log.find("stereo pair(s) in the last second: the tracker was still busy"),
-              std::string::npos)
-        << fast.log;
+  // skipped 7 to 15 pairs at 3x; one twice as fast may skip none, and then has nothing to say,
+  // but every pair has odometry.
+  if (fast.log.find("stereo pair(s) in the last second: the tracker was still busy") ==
+      std::string::npos) {
+    EXPECT_EQ(fast.odometry.size(), 200u) << "pairs without odometry and no skip reported\n"
+                                          << fast.log;
   }
   // Skipping a third of the pairs widens the gaps the motion model bridges, and the tracker
   // then finds the frame by descriptor. Where the bag ends, the camera passes close over

@@ -34,12 +34,23 @@ TEST(FrameQueue, CatchesUpAtMostTheGapAtATimeDespiteJitteredStamps) {
   queue.Push(CameraStamp(0), 0);
   EXPECT_EQ(queue.Take().frame, 0);
   for (int frame = 1; frame <= 4; ++frame) queue.Push(CameraStamp(frame), frame);
-  // Two frames on are 0.1 s + 128 ns away: still within the gap.
-  const FrameQueue<int>::Taken taken = queue.Take();
-  EXPECT_EQ(taken.frame, 2);
-  EXPECT_EQ(taken.skipped, 1u);
+  EXPECT_EQ(queue.Take().frame, 2);  // 0.1 s on: skips frame 1
   EXPECT_EQ(queue.Take().frame, 4);
   EXPECT_TRUE(queue.empty());
+
+  // EuRoC's widest pair of gaps: two frames 100,000,256 ns apart are still within 0.1 s...
+  FrameQueue<int> euroc(16, 0.1);
+  euroc.Push(0.0, 0);
+  euroc.Take();
+  euroc.Push(0.050000128, 1);
+  euroc.Push(0.100000256, 2);
+  const FrameQueue<int>::Taken taken = euroc.Take();
+  EXPECT_EQ(taken.frame, 2);
+  EXPECT_EQ(taken.skipped, 1u);
+  // ...but a frame 6 ms beyond the gap is not: the one before it is taken.
+  euroc.Push(0.150000256, 3);
+  euroc.Push(0.206000256, 4);
+  EXPECT_EQ(euroc.Take().frame, 3);
 }
 
 TEST(FrameQueue, NothingIsSkippedAcrossAGapOrTimeGoingBackwards) {
@@ -49,7 +60,10 @@ TEST(FrameQueue, NothingIsSkippedAcrossAGapOrTimeGoingBackwards) {
   // A pause of a second: the frame after it is taken as it comes, not the one after that.
   queue.Push(2.0, 1);
   queue.Push(2.05, 2);
-  EXPECT_EQ(queue.Take().frame, 1);
+  const FrameQueue<int>::Taken after_pause = queue.Take();
+  EXPECT_EQ(after_pause.frame, 1);
+  EXPECT_EQ(after_pause.skipped, 0u);
+  EXPECT_EQ(queue.Take().frame, 2);
   // The bag played again from its start: stamps fall back from 2.1 to 0.
   queue.Push(2.1, 3);
   queue.Push(0.0, 4);
@@ -114,7 +128,8 @@ TEST(FrameQueue, AtFiveTimesRealTimeAStallLeavesNoLongGap) {
 }
 
 // At 10x, 2.6 frames arrive per tracked frame: more than the gap allows. The backlog then
-// settles at a quarter's worth of steps, the gaps at about 2.6 frames, and nothing is dropped.
+// settles at four times that, the gaps at about 2.6 frames (at most 3 here), and nothing is
+// dropped; with the 0.1 s gap alone the queue would fill and drop 191 of the 400 frames.
 TEST(FrameQueue, AtTenTimesRealTimeTheGapsStayEvenAndNothingIsDropped) {
   const Replay queued = Play(16, 10, 13, 13);
   EXPECT_EQ(queued.dropped, 0);

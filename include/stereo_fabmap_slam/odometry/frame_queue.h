@@ -23,6 +23,8 @@ namespace stereo_fabmap_slam::odometry {
 // The quarter: with r frames arriving per tracked frame, the backlog settles where a quarter of
 // it is r frames, so the gaps equal r frames (as even as the tracker's speed allows) and a queue
 // of 16 absorbs a tracker up to 4 times slower than the camera before it drops frames unseen.
+//
+// Not thread-safe: the camera's thread and the tracker's share it under their own lock.
 template <typename Frame>
 class FrameQueue {
  public:
@@ -62,7 +64,7 @@ class FrameQueue {
         ++contiguous;
       }
       const double backlog = frames_[contiguous - 1].first - *last_taken_;
-      const double step = std::max(catch_up_gap_, backlog / kBacklogShare);
+      const double step = std::max(catch_up_gap_, backlog / kBacklogDivisor);
       for (std::size_t i = 1;
            i < contiguous && frames_[i].first - *last_taken_ <= step + kStampJitter; ++i) {
         index = i;
@@ -75,10 +77,12 @@ class FrameQueue {
   }
 
  private:
-  static constexpr double kBacklogShare = 4;
-  // [s] A camera's stamps jitter about its period: by 0.1 us in EuRoC (two frames at 20 Hz are
-  // 99,999,744-100,000,256 ns apart), by a millisecond or two with USB cameras. Without this,
-  // "at most 0.1 s" would take every frame half the time.
+  static constexpr double kBacklogDivisor = 4;  // the quarter above
+  // [s] A camera's stamps jitter about its period: in EuRoC each frame by +-128 ns (two frames
+  // at 20 Hz are 99,999,744-100,000,256 ns apart), with USB cameras by a millisecond or two.
+  // A stamp of 1.4e9 s held in a double resolves only 0.24 us besides. Without this, "at most
+  // 0.1 s" would take every frame half the time. 5 ms is below the period of any camera slower
+  // than 200 Hz.
   static constexpr double kStampJitter = 0.005;
 
   std::size_t capacity_;
