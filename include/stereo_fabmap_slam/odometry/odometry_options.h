@@ -68,8 +68,10 @@ struct TrackerOptions {
   // [s] Catching up, the tracker skips queued pairs but leaves at most this between the pairs
   // it tracks (more only when the backlog is long). On MH01, tracking every 2nd pair (0.1 s)
   // needed the search by descriptor once in 100 frames, every 3rd 5 times in 67, every 5th 10
-  // in 40: the motion model predicts well up to about 0.1 s at the speeds of a MAV or a
-  // hand-held camera (docs/benchmarks.md, issue 14, third measurement).
+  // in 40 (docs/benchmarks.md, issue 14, third measurement); the rendered figure eight and loop
+  // (seeds 2 and 3, never tuned on) tracked every frame at every 2nd and 3rd pair without it.
+  // The motion model predicts well up to about 0.1 s at the speeds of a MAV or a hand-held
+  // camera; MH01's close pass over pallets is the hardest stretch we have.
   double catch_up_gap = 0.1;
   PoseRefinementOptions refinement;
 
