@@ -95,7 +95,9 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   void Warn(const SkipReport& report);
   // The worker thread: tracks pairs one at a time.
   void Work();
-  void ProcessPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right);
+  // `skipped_before`: pairs passed over since the last one processed (Tracker::Track).
+  void ProcessPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right,
+                   int skipped_before);
   void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
   // Counts images of one side (0 left, 1 right); warns when more go unpaired than the sync
   // queue can hold, and when the other camera has been silent for a second (a dropout).
@@ -142,7 +144,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   std::condition_variable pair_ready_;
   std::optional<odometry::FrameQueue<ImagePair>> waiting_pairs_;  // set in onInit
   bool stopping_ = false;
-  std::uint64_t skipped_pairs_ = 0, skipped_reported_ = 0;
+  std::uint64_t skipped_pairs_ = 0, skipped_reported_ = 0, skipped_at_last_take_ = 0;
   ros::WallTime last_skip_report_;
   double last_frame_ms_ = 0;  // the last pair's tracking time, for the report
   std::thread worker_;
@@ -482,6 +484,7 @@ void StereoTrackerNodelet::Warn(const SkipReport& report) {
 void StereoTrackerNodelet::Work() {
   while (true) {
     ImagePair pair;
+    int skipped_before_pair = 0;
     SkipReport report;
     {
       std::unique_lock<std::mutex> lock(pair_mutex_);
@@ -501,20 +504,24 @@ void StereoTrackerNodelet::Work() {
       if (!waiting_pairs_->empty()) {
         odometry::FrameQueue<ImagePair>::Taken taken = waiting_pairs_->Take();
         skipped_pairs_ += taken.skipped;
+        // Passed over in the queue or dropped from a full one since the last pair taken.
+        skipped_before_pair = static_cast<int>(skipped_pairs_ - skipped_at_last_take_);
+        skipped_at_last_take_ = skipped_pairs_;
         pair = std::move(taken.frame);
       }
     }
     Warn(report);
     if (!pair.first) continue;
     const double start = SteadyMilliseconds();
-    ProcessPair(pair.first, pair.second);
+    ProcessPair(pair.first, pair.second, skipped_before_pair);
     std::lock_guard<std::mutex> lock(pair_mutex_);
     last_frame_ms_ = SteadyMilliseconds() - start;
   }
 }
 
 void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_message,
-                                       const sensor_msgs::ImageConstPtr& right_message) {
+                                       const sensor_msgs::ImageConstPtr& right_message,
+                                       int skipped_before) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!front_end_) {
     NODELET_WARN_THROTTLE(5, "no calibration yet (waiting for camera_info); frame skipped");
@@ -590,7 +597,7 @@ void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_me
   last_stamp_ = stamp;
   try {
     const pipeline::FrontEndOutput output =
-        front_end_->Process(stamp.toSec(), left->image, right->image);
+        front_end_->Process(stamp.toSec(), left->image, right->image, skipped_before);
     if (output.tracking.state == odometry::TrackingState::kLost) {
       if (output.tracking.keyframe && output.tracking.keyframe->starts_new_map) {
         // A new piece of odometry: once per piece, never throttled, so that they can be counted.

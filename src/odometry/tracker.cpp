@@ -21,6 +21,16 @@ double RotationDegrees(const Eigen::Isometry3d& motion) {
   return Eigen::AngleAxisd(motion.linear()).angle() * kRadiansToDegrees;
 }
 
+// `factor` times the motion: its rotation angle (about the same axis) and translation scaled.
+Eigen::Isometry3d ScaleMotion(const Eigen::Isometry3d& motion, double factor) {
+  const Eigen::AngleAxisd rotation(motion.linear());
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() =
+      Eigen::AngleAxisd(factor * rotation.angle(), rotation.axis()).toRotationMatrix();
+  scaled.translation() = factor * motion.translation();
+  return scaled;
+}
+
 }  // namespace
 
 const char* TrackingStateName(TrackingState state) {
@@ -190,6 +200,7 @@ map::Keyframe Tracker::MakeKeyframe(double timestamp, features::StereoFeatures f
   keyframe.T_world_camera = T_world_camera;
   keyframe.starts_new_map = starts_new_map;
   keyframe.map_point_ids.assign(features.size(), -1);
+  const std::int64_t keyframe_point_ids_begin = next_point_id_;
   for (const Match& m : inlier_matches) keyframe.map_point_ids[m.keypoint] = m.point->id;
   for (std::size_t i = 0; i < features.size(); ++i) {
     if (keyframe.map_point_ids[i] < 0 && features.HasDepth(i)) {
@@ -200,7 +211,9 @@ map::Keyframe Tracker::MakeKeyframe(double timestamp, features::StereoFeatures f
   local_map_.AddKeyframe(keyframe);
   last_keyframe_pose_ = T_world_camera;
   last_keyframe_time_ = timestamp;
-  most_tracked_since_keyframe_ = static_cast<int>(inlier_matches.size());
+  first_point_of_last_keyframe_ = keyframe_point_ids_begin;
+  most_settled_since_keyframe_ = static_cast<int>(inlier_matches.size());
+  last_settled_points_ = most_settled_since_keyframe_;
   return keyframe;
 }
 
@@ -316,14 +329,11 @@ Eigen::Isometry3d Tracker::Predict(double timestamp) const {
   if (dt > options_.max_prediction_gap) return last_T_world_camera_;
   const double ratio = velocity_dt_ > 0 && dt > 0 ? dt / velocity_dt_ : 1.0;
   if (ratio < 1.5 && ratio > 1 / 1.5) return last_T_world_camera_ * velocity_;
-  const Eigen::AngleAxisd rotation(velocity_.linear());
-  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
-  scaled.linear() = Eigen::AngleAxisd(ratio * rotation.angle(), rotation.axis()).toRotationMatrix();
-  scaled.translation() = ratio * velocity_.translation();
-  return last_T_world_camera_ * scaled;
+  return last_T_world_camera_ * ScaleMotion(velocity_, ratio);
 }
 
-TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features) {
+TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features,
+                              int frames_skipped) {
   TrackingResult result;
   const Eigen::Isometry3d predicted = Predict(timestamp);
 
@@ -399,25 +409,55 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
         (result.reason.empty() ? "" : "; ") + std::to_string(result.inliers) + " inliers";
   }
 
-  KeyframePolicyInput policy_input;
-  policy_input.tracked_points = result.inliers;
-  // The overlap with the map peaks a frame or two after a keyframe (its new points become
-  // trackable) and then falls as the camera moves on: compare with that peak.
-  most_tracked_since_keyframe_ = std::max(most_tracked_since_keyframe_, result.inliers);
-  policy_input.reference_tracked_points = most_tracked_since_keyframe_;
-  const Eigen::Isometry3d since_keyframe = last_keyframe_pose_.inverse() * T_world_camera;
-  policy_input.translation_since_last = since_keyframe.translation().norm();
-  policy_input.rotation_since_last_deg = RotationDegrees(since_keyframe);
-  policy_input.time_since_last = timestamp - last_keyframe_time_;
-  policy_input.tracking_weak = result.state == TrackingState::kWeak;
-  const KeyframeDecision decision = keyframe_policy_.Decide(policy_input);
+  const int settled_points = static_cast<int>(std::count_if(
+      inlier_matches.begin(), inlier_matches.end(),
+      [this](const Match& m) { return m.point->id < first_point_of_last_keyframe_; }));
+  const KeyframeDecision decision = keyframe_policy_.Decide(
+      KeyframeInput(timestamp, T_world_camera, result, settled_points, frames_skipped));
   if (decision.insert) {
     result.keyframe =
         MakeKeyframe(timestamp, std::move(features), T_world_camera, inlier_matches, false);
     result.reason += (result.reason.empty() ? "" : "; ") + ("keyframe: " + decision.reason);
+  } else {
+    last_settled_points_ = settled_points;
   }
   Remember(timestamp, T_world_camera, &result);
   return result;
+}
+
+KeyframePolicyInput Tracker::KeyframeInput(double timestamp,
+                                           const Eigen::Isometry3d& T_world_camera,
+                                           const TrackingResult& result, int settled_points,
+                                           int frames_skipped) {
+  KeyframePolicyInput input;
+  input.tracked_points = result.inliers;
+  input.tracking_weak = result.state == TrackingState::kWeak;
+  // The settled points tracked rise in the frames after a keyframe (points it inherited but did
+  // not match come back into view) and then fall as the camera moves on: compare with the peak.
+  most_settled_since_keyframe_ = std::max(most_settled_since_keyframe_, settled_points);
+  input.reference_settled_points = most_settled_since_keyframe_;
+  const Eigen::Isometry3d since_keyframe = last_keyframe_pose_.inverse() * T_world_camera;
+  input.now.settled_points = settled_points;
+  input.now.translation = since_keyframe.translation().norm();
+  input.now.rotation_deg = RotationDegrees(since_keyframe);
+  input.now.time = timestamp - last_keyframe_time_;
+
+  const double gap = timestamp - last_timestamp_;
+  if (frames_skipped > 0 && has_last_ && gap > 0) {
+    // The caller skipped `frames_skipped` frames before this one and will likely skip as many
+    // before the next: the last of those lies that fraction of the last gap ahead. Motion and
+    // the loss of settled points go on as over the last gap.
+    const double ahead = static_cast<double>(frames_skipped) / (frames_skipped + 1);
+    const Eigen::Isometry3d last_step = last_T_world_camera_.inverse() * T_world_camera;
+    const Eigen::Isometry3d then = since_keyframe * ScaleMotion(last_step, ahead);
+    KeyframeMeasures& measures = input.before_next_frame.emplace();
+    measures.settled_points = static_cast<int>(
+        std::lround(settled_points + ahead * (settled_points - last_settled_points_)));
+    measures.translation = then.translation().norm();
+    measures.rotation_deg = RotationDegrees(then);
+    measures.time = input.now.time + ahead * gap;
+  }
+  return input;
 }
 
 void Tracker::ApplyUpdate(const map::KeyframeUpdate& update) {

@@ -15,7 +15,7 @@ StereoFrontEnd::StereoFrontEnd(const FrontEndOptions& options, camera::StereoRec
 }
 
 FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw,
-                                       const cv::Mat& right_raw) {
+                                       const cv::Mat& right_raw, int frames_skipped) {
   FrontEndOutput output;
   FrameTiming& timing = output.timing;
   double start = clock_();
@@ -37,7 +37,7 @@ FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw
   // Kept only where a relocalization may need them after tracking consumed them (place
   // recognition on): a copy per frame is not free.
   if (place_describer_) output.features = features;
-  output.tracking = tracker_.Track(timestamp, std::move(features));
+  output.tracking = tracker_.Track(timestamp, std::move(features), frames_skipped);
   lap(&timing.tracking_ms);
   last_left_ = left;
   if (output.tracking.keyframe && place_describer_) {

@@ -15,8 +15,8 @@ StereoSlam::StereoSlam(const FrontEndOptions& front_end_options,
       backend_(bundle_adjustment_options, rectifier.camera(), clock) {}
 
 const FrameRecord& StereoSlam::ProcessFrame(double timestamp, const cv::Mat& left_raw,
-                                            const cv::Mat& right_raw) {
-  FrontEndOutput output = front_end_.Process(timestamp, left_raw, right_raw);
+                                            const cv::Mat& right_raw, int frames_skipped) {
+  FrontEndOutput output = front_end_.Process(timestamp, left_raw, right_raw, frames_skipped);
   const odometry::TrackingResult& result = output.tracking;
   FrameRecord record;
   record.timestamp = timestamp;

@@ -240,8 +240,9 @@ int main(int argc, char** argv) {
       ++processed;
       const datasets::StereoImages images = sequence.LoadStereoPair(i);
       const double start = NowMs();
+      const int skipped = i == 0 ? 0 : static_cast<int>(every) - 1;
       const pipeline::FrameRecord& frame =
-          slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+          slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right, skipped);
       processing_ms += NowMs() - start;
       if (!quiet && (frame.state == odometry::TrackingState::kLost || processed % 100 == 0)) {
         std::printf("frame %zu/%zu: %s, %zu keyframes, resident %.1f MB\n", i + 1, sequence.size(),

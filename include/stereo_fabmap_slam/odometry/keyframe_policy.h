@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "stereo_fabmap_slam/io/option_reader.h"
@@ -7,12 +8,30 @@
 
 namespace stereo_fabmap_slam::odometry {
 
+// What the keyframe bounds are checked on, at one moment since the last keyframe.
+struct KeyframeMeasures {
+  // Map points older than the last keyframe that are matched and inlier. The points the last
+  // keyframe created are left out: many of them are fragile (a third may be gone 0.1 s later on
+  // EuRoC MH01), so counting them would make the ratio depend on how soon after the keyframe the
+  // next frame is tracked, i.e. on the frame rate. ORB-SLAM likewise compares only points that
+  // more than one keyframe has seen.
+  int settled_points = 0;
+  double translation = 0;   // [m]
+  double rotation_deg = 0;  // [deg]
+  double time = 0;          // [s]
+};
+
 struct KeyframePolicyInput {
-  int tracked_points = 0;              // map points matched and inlier in this frame
-  int reference_tracked_points = 0;    // most map points tracked in a frame since the last keyframe
-  double translation_since_last = 0;   // [m]
-  double rotation_since_last_deg = 0;  // [deg]
-  double time_since_last = 0;          // [s]
+  int tracked_points = 0;  // all map points matched and inlier in this frame
+  // The most settled points tracked in a frame since the last keyframe (the keyframe's own
+  // inliers at first): the ratio rule's reference.
+  int reference_settled_points = 0;
+  KeyframeMeasures now;
+  // The measures extrapolated to the last camera frame before the next frame the tracker will
+  // process, when it skips frames (a tracker that cannot keep up): a tracker that sees every
+  // frame would take its keyframe there, so this frame, the last one before, takes it instead
+  // of the first one after. Empty when no frame is skipped.
+  std::optional<KeyframeMeasures> before_next_frame;
   bool tracking_weak = false;
 };
 
@@ -28,6 +47,9 @@ class KeyframePolicy {
   KeyframeDecision Decide(const KeyframePolicyInput& input) const;
 
  private:
+  // The first bound `measures` exceed (its name), or empty.
+  std::string ExceededBound(const KeyframeMeasures& measures, int reference_settled_points) const;
+
   KeyframePolicyOptions options_;
 };
 

@@ -18,7 +18,7 @@ struct PoseRefinementOptions {
 struct KeyframePolicyOptions {
   static constexpr char kSection[] = "keyframes";
 
-  double min_tracked_ratio = 0.7;  // tracked points / most tracked in a frame since the keyframe
+  double min_tracked_ratio = 0.7;  // tracked settled points / their peak since the keyframe
   int min_tracked_points = 80;     // fewer tracked map points: new keyframe
   double max_translation = 0.25;   // [m] since the last keyframe
   double max_rotation_deg = 10.0;  // [deg] since the last keyframe

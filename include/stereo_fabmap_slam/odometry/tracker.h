@@ -62,7 +62,10 @@ class Tracker {
           const geometry::StereoCamera& camera, int descriptor_norm,
           double max_descriptor_distance);
 
-  TrackingResult Track(double timestamp, features::StereoFeatures features);
+  // `frames_skipped`: camera frames the caller passed over since the last frame it tracked (a
+  // tracker that cannot keep up); keyframes are then taken before the bounds are crossed in the
+  // frames it will skip next (KeyframePolicyInput::before_next_frame).
+  TrackingResult Track(double timestamp, features::StereoFeatures features, int frames_skipped = 0);
   // Optimised keyframe poses and points from the backend.
   void ApplyUpdate(const map::KeyframeUpdate& update);
   // Forget the map and the motion (e.g. time went backwards); the next frame starts a new map.
@@ -111,6 +114,11 @@ class Tracker {
   TrackingResult Lose(double timestamp, features::StereoFeatures features,
                       const Eigen::Isometry3d& predicted, int consensus, TrackingResult result);
   void Remember(double timestamp, const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
+  // What the keyframe policy decides on for a frame tracked at `T_world_camera`; updates the
+  // ratio rule's reference.
+  KeyframePolicyInput KeyframeInput(double timestamp, const Eigen::Isometry3d& T_world_camera,
+                                    const TrackingResult& result, int settled_points,
+                                    int frames_skipped);
   // The constant-velocity prediction for a frame at `timestamp`.
   Eigen::Isometry3d Predict(double timestamp) const;
 
@@ -134,7 +142,10 @@ class Tracker {
   double velocity_dt_ = 0;  // [s] the time velocity_ spans; 0: unknown
   Eigen::Isometry3d last_keyframe_pose_ = Eigen::Isometry3d::Identity();
   double last_keyframe_time_ = 0;
-  int most_tracked_since_keyframe_ = 0;
+  // Points with lower ids are older than the last keyframe (settled, KeyframeMeasures).
+  std::int64_t first_point_of_last_keyframe_ = 0;
+  int most_settled_since_keyframe_ = 0;
+  int last_settled_points_ = 0;  // in the last frame tracked (or keyframe)
 };
 
 }  // namespace stereo_fabmap_slam::odometry

@@ -63,7 +63,9 @@ class StereoFrontEnd {
   StereoFrontEnd(const FrontEndOptions& options, camera::StereoRectifier rectifier, Clock clock);
 
   // Raw (unrectified) mono8 images of the calibrated size; throws std::invalid_argument otherwise.
-  FrontEndOutput Process(double timestamp, const cv::Mat& left_raw, const cv::Mat& right_raw);
+  // `frames_skipped`: stereo pairs passed over since the last one processed (Tracker::Track).
+  FrontEndOutput Process(double timestamp, const cv::Mat& left_raw, const cv::Mat& right_raw,
+                         int frames_skipped = 0);
   // Place descriptors of the last processed frame's rectified left image (empty without place
   // features): computed on demand, as only keyframes and relocalization attempts need them.
   cv::Mat DescribeLastFrame() const;

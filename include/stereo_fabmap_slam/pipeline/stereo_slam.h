@@ -73,9 +73,10 @@ class StereoSlam {
   void LoadMap(const std::string& path);
   SlamMode mode() const { return mode_; }
 
-  // Raw (unrectified) mono8 images of one stereo pair.
+  // Raw (unrectified) mono8 images of one stereo pair; `frames_skipped` stereo pairs were passed
+  // over since the last one processed (a caller that cannot keep up: Tracker::Track).
   const FrameRecord& ProcessFrame(double timestamp, const cv::Mat& left_raw,
-                                  const cv::Mat& right_raw);
+                                  const cv::Mat& right_raw, int frames_skipped = 0);
 
   // Relocalizes a stereo pair against the whole map without tracking it or changing anything
   // (the relocalize service's check of a view). Loop closing must be on.
