@@ -4,6 +4,7 @@
 // found, whose edge joins the new piece of odometry to the map. Everything algorithmic is
 // pipeline::StereoFrontEnd and the LoopDetector's Relocalizer; this file converts, calls and
 // publishes.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -95,9 +96,10 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   void Warn(const SkipReport& report);
   // The worker thread: tracks pairs one at a time.
   void Work();
-  // `skipped_before`: pairs passed over since the last one processed (Tracker::Track).
+  // `arrival`: the pair's place in the stream (1, 2, ...), which tells the tracker how many
+  // pairs were passed over since the last one it tracked (Tracker::Track's frames_skipped).
   void ProcessPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::ImageConstPtr& right,
-                   int skipped_before);
+                   std::uint64_t arrival);
   void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
   // Counts images of one side (0 left, 1 right); warns when more go unpaired than the sync
   // queue can hold, and when the other camera has been silent for a second (a dropout).
@@ -131,7 +133,8 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   // the same image again under a new stamp. Worker thread only.
   cv_bridge::CvImageConstPtr previous_left_, previous_right_;
   int frozen_frames_ = 0;
-  int frames_lost_with_map_kept_ = 0;  // lost in a row, the tracker's map kept
+  int frames_lost_with_map_kept_ = 0;       // lost in a row, the tracker's map kept
+  std::uint64_t last_tracked_arrival_ = 0;  // ImagePair::arrival of the last pair tracked
 
   // Between the synchroniser and the worker: a bounded queue (tracker/queued_pairs), so that a
   // tracker slower than the camera (a bag played fast, a busy machine) skips pairs instead of
@@ -139,12 +142,15 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   // left image without its right). The worker takes pairs so that the gaps between tracked
   // pairs stay short (odometry::FrameQueue). Skipped pairs, dropped from a full queue or passed
   // over, are counted and reported once a second.
-  using ImagePair = std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::ImageConstPtr>;
+  struct ImagePair {
+    sensor_msgs::ImageConstPtr left, right;
+    std::uint64_t arrival = 0;  // its place in the stream of pairs (pairs_ when it came)
+  };
   std::mutex pair_mutex_;
   std::condition_variable pair_ready_;
   std::optional<odometry::FrameQueue<ImagePair>> waiting_pairs_;  // set in onInit
   bool stopping_ = false;
-  std::uint64_t skipped_pairs_ = 0, skipped_reported_ = 0, skipped_at_last_take_ = 0;
+  std::uint64_t skipped_pairs_ = 0, skipped_reported_ = 0;
   ros::WallTime last_skip_report_;
   double last_frame_ms_ = 0;  // the last pair's tracking time, for the report
   std::thread worker_;
@@ -444,14 +450,14 @@ void StereoTrackerNodelet::OnSingleImage(int side) {
 
 void StereoTrackerNodelet::OnImages(const sensor_msgs::ImageConstPtr& left_message,
                                     const sensor_msgs::ImageConstPtr& right_message) {
-  ++pairs_;
+  const std::uint64_t arrival = ++pairs_;
   if (dropout_reported_.exchange(false)) NODELET_INFO("stereo pairs arrive again");
   SkipReport report;
   {
     std::lock_guard<std::mutex> lock(pair_mutex_);
     // A full queue drops the newest pair: what waits stays a contiguous stretch of the stream.
     if (!waiting_pairs_->Push(left_message->header.stamp.toSec(),
-                              ImagePair(left_message, right_message))) {
+                              ImagePair{left_message, right_message, arrival})) {
       ++skipped_pairs_;
     }
     report = TakeSkipReport(ros::WallTime::now());
@@ -484,7 +490,6 @@ void StereoTrackerNodelet::Warn(const SkipReport& report) {
 void StereoTrackerNodelet::Work() {
   while (true) {
     ImagePair pair;
-    int skipped_before_pair = 0;
     SkipReport report;
     {
       std::unique_lock<std::mutex> lock(pair_mutex_);
@@ -504,16 +509,13 @@ void StereoTrackerNodelet::Work() {
       if (!waiting_pairs_->empty()) {
         odometry::FrameQueue<ImagePair>::Taken taken = waiting_pairs_->Take();
         skipped_pairs_ += taken.skipped;
-        // Passed over in the queue or dropped from a full one since the last pair taken.
-        skipped_before_pair = static_cast<int>(skipped_pairs_ - skipped_at_last_take_);
-        skipped_at_last_take_ = skipped_pairs_;
         pair = std::move(taken.frame);
       }
     }
     Warn(report);
-    if (!pair.first) continue;
+    if (!pair.left) continue;
     const double start = SteadyMilliseconds();
-    ProcessPair(pair.first, pair.second, skipped_before_pair);
+    ProcessPair(pair.left, pair.right, pair.arrival);
     std::lock_guard<std::mutex> lock(pair_mutex_);
     last_frame_ms_ = SteadyMilliseconds() - start;
   }
@@ -521,7 +523,7 @@ void StereoTrackerNodelet::Work() {
 
 void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_message,
                                        const sensor_msgs::ImageConstPtr& right_message,
-                                       int skipped_before) {
+                                       std::uint64_t arrival) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!front_end_) {
     NODELET_WARN_THROTTLE(5, "no calibration yet (waiting for camera_info); frame skipped");
@@ -595,6 +597,14 @@ void StereoTrackerNodelet::ProcessPair(const sensor_msgs::ImageConstPtr& left_me
         (stamp - last_stamp_).toSec());
   }
   last_stamp_ = stamp;
+  // Pairs between this one and the last tracked: passed over in the queue, dropped from a full
+  // one, or taken and refused above. Capped, as beyond a few the look-ahead reaches a whole gap.
+  constexpr std::uint64_t kMostSkippedToCount = 100;
+  const int skipped_before =
+      static_cast<int>(last_tracked_arrival_ == 0 || arrival <= last_tracked_arrival_
+                           ? 0
+                           : std::min(arrival - last_tracked_arrival_ - 1, kMostSkippedToCount));
+  last_tracked_arrival_ = arrival;
   try {
     const pipeline::FrontEndOutput output =
         front_end_->Process(stamp.toSec(), left->image, right->image, skipped_before);

@@ -70,6 +70,7 @@ void Tracker::Reset() {
   has_last_ = false;
   velocity_ = Eigen::Isometry3d::Identity();
   velocity_dt_ = 0;
+  frames_since_tracked_ = 0;
 }
 
 std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFeatures& features,
@@ -241,6 +242,7 @@ void Tracker::Remember(double timestamp, const Eigen::Isometry3d& T_world_camera
     velocity_dt_ = timestamp - last_timestamp_;
   }
   last_timestamp_ = timestamp;
+  frames_since_tracked_ = 0;
   has_last_ = true;
   last_T_world_camera_ = T_world_camera;
   result->T_world_camera = T_world_camera;
@@ -334,6 +336,7 @@ Eigen::Isometry3d Tracker::Predict(double timestamp) const {
 
 TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features,
                               int frames_skipped) {
+  frames_since_tracked_ += std::max(frames_skipped, 0) + 1;
   TrackingResult result;
   const Eigen::Isometry3d predicted = Predict(timestamp);
 
@@ -445,9 +448,10 @@ KeyframePolicyInput Tracker::KeyframeInput(double timestamp,
   const double gap = timestamp - last_timestamp_;
   if (frames_skipped > 0 && has_last_ && gap > 0) {
     // The caller skipped `frames_skipped` frames before this one and will likely skip as many
-    // before the next: the last of those lies that fraction of the last gap ahead. Motion and
-    // the loss of settled points go on as over the last gap.
-    const double ahead = static_cast<double>(frames_skipped) / (frames_skipped + 1);
+    // before the next: the last of those lies that many camera frames ahead, of the
+    // frames_since_tracked_ the gap since the last tracked frame spans (frames lost with the map
+    // kept are in the gap too). Motion and the loss of settled points go on as over that gap.
+    const double ahead = static_cast<double>(frames_skipped) / frames_since_tracked_;
     const Eigen::Isometry3d last_step = last_T_world_camera_.inverse() * T_world_camera;
     const Eigen::Isometry3d then = since_keyframe * ScaleMotion(last_step, ahead);
     KeyframeMeasures& measures = input.before_next_frame.emplace();

@@ -27,6 +27,7 @@ TEST(KeyframePolicy, EachCriterionTriggersOnItsOwn) {
 
   KeyframePolicyInput input = Steady();
   input.tracked_points = 60;  // below min_tracked_points (80)
+  input.now.settled_points = 50;
   EXPECT_EQ(policy.Decide(input).reason, "few tracked points");
   input = Steady();
   input.now.settled_points = 150;  // 150 < 0.7 * 220

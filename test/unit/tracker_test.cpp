@@ -1,7 +1,12 @@
 // Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model;
 // the motion model spans skipped frames; a motion it does not predict is found by descriptor; a
-// lost frame that still shows the map keeps it for the next frames, for a while.
+// lost frame that still shows the map keeps it for the next frames, for a while; a keyframe due
+// in the frames a busy caller will skip is taken before them.
 #include "stereo_fabmap_slam/odometry/tracker.h"
+
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -115,6 +120,47 @@ TEST(Tracker, SkippedFramesDoNotLoseTracking) {
   EXPECT_EQ(after_gap.reason.find("by descriptor"), std::string::npos) << after_gap.reason;
   EXPECT_LT((after_gap.T_world_camera.translation() - SidewaysAndTurned(1.8).translation()).norm(),
             1e-3);
+}
+
+// The frames at which a tracker that sees every `every`-th frame of a camera sliding sideways
+// 4 cm a frame (20 Hz) takes keyframes, with only the translation bound (0.25 m) on, and why.
+std::vector<std::pair<int, std::string>> TranslationKeyframes(int every) {
+  odometry::TrackerOptions options;
+  options.parallel = false;
+  odometry::KeyframePolicyOptions keyframes;
+  keyframes.min_tracked_ratio = 0;
+  keyframes.min_tracked_points = 0;
+  keyframes.max_rotation_deg = 180;
+  keyframes.max_interval = 100;
+  odometry::Tracker tracker(options, keyframes, kCamera, cv::NORM_HAMMING, 60.0);
+  StereoWorld world;
+  world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
+  std::vector<std::pair<int, std::string>> taken;
+  for (int frame = 0; frame <= 12; frame += every) {
+    const odometry::TrackingResult result = tracker.Track(
+        0.05 * frame, Observe(world, SidewaysAndTurned(0.04 * frame)), frame == 0 ? 0 : every - 1);
+    EXPECT_EQ(result.state, odometry::TrackingState::kOk) << frame << ": " << result.reason;
+    if (result.keyframe && frame > 0) taken.emplace_back(frame, result.reason);
+  }
+  return taken;
+}
+
+TEST(Tracker, AKeyframeDueInFramesToBeSkippedIsTakenBeforeThem) {
+  // Every frame: the bound is crossed at frame 7 (0.28 m). Every 3rd frame: frame 6 (0.24 m) is
+  // the last tracked before it, and the frames 7-8 the tracker will skip cross it (0.28 m at
+  // frame 7): the keyframe is taken at 6, not at 9 (0.36 m). At frame 3 the skipped frames
+  // reach 0.20 m only: no keyframe.
+  const std::vector<std::pair<int, std::string>> every_frame = TranslationKeyframes(1);
+  ASSERT_FALSE(every_frame.empty());
+  EXPECT_EQ(every_frame[0].first, 7);
+  EXPECT_NE(every_frame[0].second.find("keyframe: translation"), std::string::npos)
+      << every_frame[0].second;
+  const std::vector<std::pair<int, std::string>> every_third = TranslationKeyframes(3);
+  ASSERT_FALSE(every_third.empty());
+  EXPECT_EQ(every_third[0].first, 6);
+  EXPECT_NE(every_third[0].second.find("keyframe: translation before the next tracked frame"),
+            std::string::npos)
+      << every_third[0].second;
 }
 
 TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {

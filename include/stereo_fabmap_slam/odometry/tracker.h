@@ -62,9 +62,9 @@ class Tracker {
           const geometry::StereoCamera& camera, int descriptor_norm,
           double max_descriptor_distance);
 
-  // `frames_skipped`: camera frames the caller passed over since the last frame it tracked (a
-  // tracker that cannot keep up); keyframes are then taken before the bounds are crossed in the
-  // frames it will skip next (KeyframePolicyInput::before_next_frame).
+  // `frames_skipped`: camera frames the caller passed over since the last frame it gave to
+  // Track (a tracker that cannot keep up); keyframes are then taken before the bounds are
+  // crossed in the frames it will skip next (KeyframePolicyInput::before_next_frame).
   TrackingResult Track(double timestamp, features::StereoFeatures features, int frames_skipped = 0);
   // Optimised keyframe poses and points from the backend.
   void ApplyUpdate(const map::KeyframeUpdate& update);
@@ -146,6 +146,9 @@ class Tracker {
   std::int64_t first_point_of_last_keyframe_ = 0;
   int most_settled_since_keyframe_ = 0;
   int last_settled_points_ = 0;  // in the last frame tracked (or keyframe)
+  // Camera frames since the last tracked frame, this one included: those the caller skipped
+  // and those lost with the map kept (Track's frames_skipped).
+  int frames_since_tracked_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::odometry
