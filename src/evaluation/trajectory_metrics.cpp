@@ -96,9 +96,14 @@ EvaluationResult EvaluateTrajectory(const Trajectory& reference, const Trajector
   result.matched = pairs.size();
   const std::size_t needed = options.alignment == AlignmentMode::kNone ? 2 : 3;
   if (pairs.size() < needed) {
+    // Named from the side that searched, the shorter (see AssociateByTimestamp).
+    const bool estimate_longer = estimate.size() > reference.size();
     throw std::invalid_argument(
-        "only " + std::to_string(pairs.size()) + " of " + std::to_string(estimate.size()) +
-        " estimated poses have a reference pose within " + std::to_string(options.max_dt) +
+        "only " + std::to_string(pairs.size()) + " of " +
+        std::to_string(estimate_longer ? reference.size() : estimate.size()) +
+        (estimate_longer ? " reference poses have an estimated pose within "
+                         : " estimated poses have a reference pose within ") +
+        std::to_string(options.max_dt) +
         " s; check the timestamps (seconds in both files?) or raise --max-dt");
   }
   std::vector<Eigen::Vector3d> reference_positions, estimate_positions;

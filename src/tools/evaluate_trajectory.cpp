@@ -49,8 +49,8 @@ evaluation::Trajectory ReadWithWarnings(const std::string& path) {
   if (notes.repeated_stamps > 0 || notes.unordered_stamps > 0) {
     std::fprintf(stderr,
                  "evaluate_trajectory: warning: %s: %zu repeated and %zu decreasing timestamps; "
-                 "every pose is kept and each estimated pose takes the ground-truth pose nearest "
-                 "in time (as evo associates)\n",
+                 "every pose is kept, and each pose of the shorter file takes the pose of the "
+                 "other nearest in time, the first on a tie (as evo associates)\n",
                  path.c_str(), notes.repeated_stamps, notes.unordered_stamps);
   }
   return trajectory;

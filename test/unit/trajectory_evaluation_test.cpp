@@ -161,6 +161,25 @@ TEST(Association, DropsPosesBeyondTheLimit) {
   EXPECT_EQ(AssociateByTimestamp(reference, estimate, 0.03).size(), 6u);
 }
 
+// As numpy's argmin in evo: of two poses equally near in time, the first in the file, whichever
+// is earlier in time; and the shorter trajectory searches the longer.
+TEST(Association, TiesGoToTheFirstInTheFileAndTheShorterSideSearches) {
+  const Trajectory reference = {{1.25, {}}, {0.75, {}}, {3.0, {}}, {4.0, {}}};
+  const Trajectory estimate = {{1.0, {}}, {3.0, {}}};
+  std::vector<AssociatedPair> pairs = AssociateByTimestamp(reference, estimate, 0.25);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].reference, 0u);  // 1.25 before 0.75 in the file
+  EXPECT_EQ(pairs[1].reference, 2u);
+  // Swapped, the estimate is the longer: the 2 reference poses search it, and 0.75, though
+  // within the limit of 1.0, is left out (the estimate searching would have paired it too).
+  pairs = AssociateByTimestamp(estimate, reference, 0.25);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].reference, 0u);
+  EXPECT_EQ(pairs[0].estimate, 0u);
+  EXPECT_EQ(pairs[1].reference, 1u);
+  EXPECT_EQ(pairs[1].estimate, 2u);
+}
+
 TEST(Rpe, KnownDriftPerStep) {
   // Reference: 1 m forward a frame. Estimate: 1.1 m forward and 1 degree more yaw a frame.
   Trajectory reference, estimate;

@@ -105,29 +105,65 @@ TEST(TrajectoryFiles, WhatCannotBeMeantIsRefusedWithFileAndLine) {
 // Worked by hand: the centroids agree; the cross-covariance of the pairs is the ground truth's
 // own (the +-3 cm cancel pair by pair), symmetric and positive, so Umeyama's rotation is the
 // identity and its translation zero; every pose is then 3 cm off: ATE RMSE = mean = max = 0.03 m.
-TEST(TrajectoryFiles, AteOnRepeatedAndUnorderedStampsMatchesAHandComputation) {
-  TemporaryDirectory temp;
-  const std::string truth = temp.path() + "/truth.txt", estimate = temp.path() + "/est.txt";
+// The corners of a 2 m square, one per second, as TUM lines "t x y z 0 0 0 1" for the given
+// seconds; z_offsets gives, per line of each second, how far above the corner the pose is.
+std::string SquareCorners(const std::vector<int>& seconds, const std::vector<double>& z_offsets) {
   const double corners[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
-  std::string truth_text, estimate_text;
-  for (int i : {2, 0, 3, 1}) {  // shuffled
-    truth_text += std::to_string(i) + " " + std::to_string(corners[i][0]) + " " +
-                  std::to_string(corners[i][1]) + " 0 0 0 0 1\n";
-  }
-  for (int i = 0; i < 4; ++i) {
-    for (const char* z : {"0.03", "-0.03"}) {
-      estimate_text += std::to_string(i) + " " + std::to_string(corners[i][0]) + " " +
-                       std::to_string(corners[i][1]) + " " + z + " 0 0 0 1\n";
+  std::string text;
+  for (int i : seconds) {
+    for (double z : z_offsets) {
+      text += std::to_string(i) + " " + std::to_string(corners[i % 4][0]) + " " +
+              std::to_string(corners[i % 4][1]) + " " + std::to_string(z) + " 0 0 0 1\n";
     }
   }
-  WriteTextFile(truth, truth_text);
-  WriteTextFile(estimate, estimate_text);
+  return text;
+}
+
+// evo_ape associates the shorter trajectory into the longer (evo/core/sync.py,
+// associate_trajectories): here the 4 ground-truth poses each take the first of the two
+// estimated poses at their stamp.
+TEST(TrajectoryFiles, AnEstimateLongerThanTheTruthIsAssociatedAsEvoDoes) {
+  TemporaryDirectory temp;
+  const std::string truth = temp.path() + "/truth.txt", estimate = temp.path() + "/est.txt";
+  WriteTextFile(truth, SquareCorners({2, 0, 3, 1}, {0.0}));  // shuffled
+  WriteTextFile(estimate, SquareCorners({0, 1, 2, 3}, {0.03, -0.03}));
   TrajectoryFileNotes truth_notes, estimate_notes;
   const evaluation::EvaluationResult result = evaluation::EvaluateTrajectory(
       ReadTrajectory(truth, &truth_notes), ReadTrajectory(estimate, &estimate_notes), {});
   EXPECT_EQ(truth_notes.unordered_stamps, 2u);  // 2 -> 0 and 3 -> 1
   EXPECT_EQ(estimate_notes.repeated_stamps, 4u);
-  EXPECT_EQ(result.matched, 8u);
+  // By hand: 4 pairs, every estimate 3 cm above its corner; the SE(3) alignment moves the
+  // estimate 3 cm down and leaves no error. Pairing each estimated pose instead would give 8
+  // pairs, 3 cm above and below, and an ATE of 3 cm.
+  EXPECT_EQ(result.matched, 4u);
+  EXPECT_NEAR(result.ate.rmse, 0.0, 1e-9);
+  EXPECT_NEAR(Eigen::AngleAxisd(result.alignment.rotation).angle(), 0.0, 1e-9);
+  EXPECT_NEAR((result.alignment.translation - Eigen::Vector3d(0, 0, -0.03)).norm(), 0.0, 1e-9);
+  // Pairs come in the truth's file order, as evo's.
+  ASSERT_EQ(result.matched_reference.size(), 4u);
+  EXPECT_EQ(result.matched_reference[0].timestamp, 2.0);
+  EXPECT_EQ(result.matched_reference[3].timestamp, 1.0);
+}
+
+// The estimate shorter than the truth, as usual, with stamps repeated on both sides: each
+// estimated pose is paired, and of two ground-truth poses with one stamp the first in the file.
+TEST(TrajectoryFiles, AteOnRepeatedAndUnorderedStampsMatchesAHandComputation) {
+  TemporaryDirectory temp;
+  const std::string truth = temp.path() + "/truth.txt", estimate = temp.path() + "/est.txt";
+  // Second 1 twice: first the true corner, then a pose 5 m away that must not be taken.
+  WriteTextFile(truth, SquareCorners({3, 1, 0, 2}, {0.0}) + "1 5 5 0 0 0 0 1\n" +
+                           SquareCorners({4, 5, 6}, {0.0}));
+  WriteTextFile(estimate, SquareCorners({0, 1, 2}, {0.03, -0.03}));
+  TrajectoryFileNotes truth_notes, estimate_notes;
+  const evaluation::EvaluationResult result = evaluation::EvaluateTrajectory(
+      ReadTrajectory(truth, &truth_notes), ReadTrajectory(estimate, &estimate_notes), {});
+  EXPECT_EQ(truth_notes.repeated_stamps, 0u);   // the second 1 follows 2, so it decreases
+  EXPECT_EQ(truth_notes.unordered_stamps, 3u);  // 3 -> 1, 1 -> 0 and 2 -> 1
+  EXPECT_EQ(estimate_notes.repeated_stamps, 3u);
+  // By hand: 6 pairs, 3 cm above and below three corners. The centroids and the cross-covariance
+  // of the positions are those of the corners alone (the offsets cancel), so the alignment is the
+  // identity and every pose is 3 cm off. Taking the 5 m pose for second 1 would give metres.
+  EXPECT_EQ(result.matched, 6u);
   EXPECT_NEAR(result.ate.rmse, 0.03, 1e-9);
   EXPECT_NEAR(result.ate.max, 0.03, 1e-9);
   EXPECT_NEAR(Eigen::AngleAxisd(result.alignment.rotation).angle(), 0.0, 1e-9);
