@@ -74,7 +74,7 @@ $(FABMAP_DEFAULT)/detector_model.yaml:
 	@echo "Training the default FAB-MAP vocabulary and detector model (first build only, under a minute)"
 	rm -rf build/fabmap/synthetic
 	$(BIN)/make_synthetic_sequence --output build/fabmap/synthetic --route figure8 --seconds 20 --seed 7 --no-bag > /dev/null
-	$(BIN)/train_fabmap --output $(FABMAP_DEFAULT) --spacing 5 /usr/share/doc/opencv-doc/examples/data build/fabmap/synthetic
+	$(BIN)/train_fabmap --output $(FABMAP_DEFAULT) --every 5 /usr/share/doc/opencv-doc/examples/data build/fabmap/synthetic
 	rm -rf build/fabmap/synthetic
 
 vocabulary: deps $(WS)/build/Makefile

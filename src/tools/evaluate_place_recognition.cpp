@@ -43,7 +43,7 @@ namespace fs = std::filesystem;
 
 constexpr char kUsage[] =
     "usage: evaluate_place_recognition ASL_DIR [--tau T] [--exclude-seconds S]\n"
-    "       evaluate_place_recognition IMAGE_DIR --ground-truth FILE [--exclude-frames K]\n"
+    "       evaluate_place_recognition IMAGE_DIR --gt FILE [--exclude-frames K]\n"
     "           [--places per-image|update|both] [--every N] [--vocabulary FILE]\n"
     "           [--config FILE] [--fabmap-config FILE] [--output DIR] [--json]\n"
     "Each frame in turn is a query against the earlier frames' places; FAB-MAP answers with\n"
@@ -53,7 +53,7 @@ constexpr char kUsage[] =
     "  ASL_DIR            EuRoC layout with ground truth: two frames show the same place when\n"
     "                     at least T (--tau, default 0.5) of one frame's stereo points land in\n"
     "                     the other's image, carried there by the ground-truth poses\n"
-    "  --ground-truth F   for an image folder (*.png, *.jpg in name order): an N x N matrix,\n"
+    "  --gt F             for an image folder (*.png, *.jpg in name order): an N x N matrix,\n"
     "                     CSV/text of N rows of N numbers or a grey N x N image, non-zero =\n"
     "                     same place\n"
     "  --exclude-seconds  earlier frames at most S seconds (default 5) before a query are\n"
@@ -110,8 +110,7 @@ Input ReadSequence(const std::string& directory, int every, double tau, double w
   const datasets::EurocSequence sequence = datasets::EurocSequence::Open(directory);
   if (sequence.size() == 0) throw std::invalid_argument(directory + ": no images");
   if (!sequence.has_ground_truth()) {
-    throw std::invalid_argument(directory +
-                                ": no ground truth (give an image folder with --ground-truth)");
+    throw std::invalid_argument(directory + ": no ground truth (give an image folder with --gt)");
   }
   const camera::StereoRectifier rectifier =
       camera::StereoRectifier::FromCalibration(sequence.calibration(), options.rectification);
@@ -173,7 +172,7 @@ Input ReadFolder(const std::string& directory, const std::string& matrix, int ev
                  double window_frames, const place_recognition::PlaceRecognitionOptions& options,
                  const place_recognition::Vocabulary& vocabulary) {
   if (fs::is_directory(directory + "/mav0") || fs::is_directory(directory + "/cam0"))
-    throw std::invalid_argument("--ground-truth is for image folders; a sequence has poses");
+    throw std::invalid_argument("--gt is for image folders; a sequence has poses");
   // Every image first: the matrix covers all of them, also with --every.
   const std::vector<tools::ImageSource> all_images = tools::ListImages(directory, 1);
   const evaluation::PlaceGroundTruth all = evaluation::PlaceGroundTruth::Load(matrix);
@@ -326,11 +325,10 @@ int main(int argc, char** argv) {
   int every = 1;
   double tau = 0.5, exclude_seconds = 5, exclude_frames = 5;
   try {
-    args.emplace(
-        argc, argv,
-        std::set<std::string>{"tau", "exclude-seconds", "exclude-frames", "ground-truth", "places",
-                              "every", "vocabulary", "config", "fabmap-config", "output"},
-        std::set<std::string>{"json", "help"});
+    args.emplace(argc, argv,
+                 std::set<std::string>{"tau", "exclude-seconds", "exclude-frames", "gt", "places",
+                                       "every", "vocabulary", "config", "fabmap-config", "output"},
+                 std::set<std::string>{"json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -347,12 +345,12 @@ int main(int argc, char** argv) {
     exclude_frames = args->NumberOr("exclude-frames", exclude_frames);
     if (!(exclude_seconds >= 0) || !(exclude_frames >= 0))
       throw std::invalid_argument("--exclude-seconds and --exclude-frames must be >= 0");
-    if (args->Value("ground-truth") ? args->Value("exclude-seconds").has_value()
-                                    : args->Value("exclude-frames").has_value()) {
+    if (args->Value("gt") ? args->Value("exclude-seconds").has_value()
+                          : args->Value("exclude-frames").has_value()) {
       throw std::invalid_argument(
-          "--exclude-seconds is for sequences, --exclude-frames for folders with --ground-truth");
+          "--exclude-seconds is for sequences, --exclude-frames for folders with --gt");
     }
-    if (args->Value("ground-truth") && args->Value("tau"))
+    if (args->Value("gt") && args->Value("tau"))
       throw std::invalid_argument("--tau is for sequences (ground truth from poses)");
     const std::string places = args->ValueOr("places", "both");
     if (places == "per-image" || places == "both")
@@ -382,11 +380,10 @@ int main(int argc, char** argv) {
 
     const std::string source = args->positional()[0];
     const double start = NowSeconds();
-    const Input input =
-        args->Value("ground-truth")
-            ? ReadFolder(source, *args->Value("ground-truth"), every, exclude_frames, place_options,
-                         vocabulary)
-            : ReadSequence(source, every, tau, exclude_seconds, options, place_options, vocabulary);
+    const Input input = args->Value("gt") ? ReadFolder(source, *args->Value("gt"), every,
+                                                       exclude_frames, place_options, vocabulary)
+                                          : ReadSequence(source, every, tau, exclude_seconds,
+                                                         options, place_options, vocabulary);
     std::fprintf(stderr, "features, words and ground truth: %.1f s\n", NowSeconds() - start);
     const evaluation::ExcludedPairs excluded =
         evaluation::CountExcludedPairs(input.frames, *input.truth);

@@ -28,10 +28,10 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 namespace fs = std::filesystem;
 
 constexpr char kUsage[] =
-    "usage: train_fabmap --output DIR [--config FILE] [--fabmap-config FILE] [--spacing N]\n"
+    "usage: train_fabmap --output DIR [--config FILE] [--fabmap-config FILE] [--every N]\n"
     "                    [--branching B] [--depth D] SOURCE [SOURCE ...]\n"
     "SOURCE: a folder of images (*.png, *.jpg) or a EuRoC ASL sequence (left images); of each,\n"
-    "every N-th image (--spacing) is a training place, so that training views are distinct.\n"
+    "every N-th image (--every) is a training place, so that training views are distinct.\n"
     "Features: the detector and descriptor of --config (default config/euroc.yaml) with the\n"
     "selection, vocabulary size and spacing of --fabmap-config (default config/fabmap.yaml);\n"
     "the flags override the latter. Writes DIR/vocabulary.bin (branching^depth words at most),\n"
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   try {
     args.emplace(
         argc, argv,
-        std::set<std::string>{"output", "config", "fabmap-config", "spacing", "branching", "depth"},
+        std::set<std::string>{"output", "config", "fabmap-config", "every", "branching", "depth"},
         std::set<std::string>{"help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -68,12 +68,12 @@ int main(int argc, char** argv) {
         place_recognition::LoadPlaceRecognitionOptions(
             args->ValueOr("fabmap-config", STEREO_FABMAP_SLAM_CONFIG_DIR "/fabmap.yaml"),
             io::OptionsFile::Load(config).Read<features::FeatureOptions>());
-    const int spacing = static_cast<int>(args->NumberOr("spacing", options.training.spacing));
+    const int spacing = static_cast<int>(args->NumberOr("every", options.training.spacing));
     place_recognition::VocabularyOptions& vocabulary_options = options.vocabulary;
     vocabulary_options.branching =
         static_cast<int>(args->NumberOr("branching", vocabulary_options.branching));
     vocabulary_options.depth = static_cast<int>(args->NumberOr("depth", vocabulary_options.depth));
-    if (spacing < 1) throw std::runtime_error("--spacing must be >= 1");
+    if (spacing < 1) throw std::runtime_error("--every must be >= 1");
     vocabulary_options.Validate();
     std::vector<std::string> images;
     // Per source that is a sequence: the indices of its images, in order. Neighbours (`spacing`

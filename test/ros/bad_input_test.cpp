@@ -190,6 +190,7 @@ TEST_F(BadInputTest, WarnsSkipsAndKeepsTracking) {
   // Time going backwards (a looped bag): reset, and tracking goes on from there.
   const std::int64_t looped = t0 - 10 * step;
   for (std::size_t i = 0; i < 3; ++i) SendReal(i, looped + static_cast<std::int64_t>(i) * step);
+  EXPECT_TRUE(Logged("time went backwards")) << "the reset is named";
   EXPECT_TRUE(HasOdometry(looped + 2 * step)) << "tracking must resume after time went backwards";
 }
 

@@ -174,7 +174,7 @@ TEST_F(RenderedTwice, ImageFolderWithMatrixFindsEveryRevisit) {
   std::string output;
   const std::string out = temp_->path() + "/folder_out";
   const std::string command = std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + folder.string() +
-                              " --ground-truth " + temp_->path() + "/matrix.csv --exclude-frames " +
+                              " --gt " + temp_->path() + "/matrix.csv --exclude-frames " +
                               std::to_string(n - 1) + " --output " + out;
   ASSERT_EQ(RunCommand(command + " 2>/dev/null", &output), 0) << output;
   EXPECT_NE(output.find("recall@P1"), std::string::npos) << output;
@@ -188,7 +188,7 @@ TEST_F(RenderedTwice, ImageFolderWithMatrixFindsEveryRevisit) {
   // A matrix that does not fit the folder is an error, not a measurement.
   WriteTextFile(temp_->path() + "/small.csv", "1,0\n0,1\n");
   EXPECT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + folder.string() +
-                           " --ground-truth " + temp_->path() + "/small.csv 2>&1",
+                           " --gt " + temp_->path() + "/small.csv 2>&1",
                        &output),
             1);
   EXPECT_NE(output.find("2 x 2 matrix for 80 images"), std::string::npos) << output;
@@ -258,7 +258,7 @@ TEST(EvaluatePlaceRecognitionTool, InputWithoutImagesIsAnError) {
             0);
   WriteTextFile(temp.path() + "/gt.csv", "1\n");
   EXPECT_NE(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() +
-                           " --ground-truth " + temp.path() + "/gt.csv 2>&1",
+                           " --gt " + temp.path() + "/gt.csv 2>&1",
                        &output),
             0);
   EXPECT_NE(output.find("no images"), std::string::npos) << output;
