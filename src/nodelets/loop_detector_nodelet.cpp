@@ -311,7 +311,16 @@ void LoopDetectorNodelet::Work() {
         std::lock_guard<std::mutex> lock(mutex_);
         if (mode_ == pipeline::SlamMode::kLocalization) continue;  // the map is not extended
         if (static_cast<std::int64_t>(message->id) < loaded_below_) continue;  // before a load
+        const bool first_keyframe = !detector_;
         place_recognition::LoopDetector& detector = Detector(*message);
+        // A LoopDetector (re)started while the tracker runs: say what its places do not cover.
+        if (first_keyframe && message->id > 0 && loaded_below_ == 0) {
+          NODELET_WARN(
+              "first keyframe received is %lu: the keyframes before it are not places of this "
+              "LoopDetector (restarted while the tracker ran?); loops and relocalizations find "
+              "keyframes from here on",
+              static_cast<unsigned long>(message->id));
+        }
         map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
         keyframe.starts_new_map = keyframe.starts_new_map || next_starts_new_map_;
         next_starts_new_map_ = false;
