@@ -43,6 +43,8 @@ void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("odometry_rotation_sigma_deg", &odometry_rotation_sigma_deg);
   visitor.Visit("loop_loss_scale", &loop_loss_scale);
   visitor.Visit("iterations", &iterations);
+  visitor.Visit("consistent_loop_chi2", &consistent_loop_chi2);
+  visitor.Visit("local_keyframes", &local_keyframes);
 }
 
 void PoseGraphOptions::Validate() const {
@@ -52,6 +54,11 @@ void PoseGraphOptions::Validate() const {
   if (iterations < 1) {
     throw std::invalid_argument("pose_graph.iterations must be >= 1, got " +
                                 std::to_string(iterations));
+  }
+  RequirePositive("consistent_loop_chi2", consistent_loop_chi2);
+  if (local_keyframes < 0) {
+    throw std::invalid_argument("pose_graph.local_keyframes must be >= 0, got " +
+                                std::to_string(local_keyframes));
   }
 }
 

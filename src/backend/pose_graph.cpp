@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -127,11 +128,72 @@ void PoseGraph::AddLoop(const map::LoopEdge& edge, PoseGraphEdgeType type) {
   loops_.push_back(loop);
 }
 
+double PoseGraph::LoopChiSquare(const Loop& loop) const {
+  const Keyframe& a = keyframes_[loop.match];
+  const Keyframe& b = keyframes_[loop.query];
+  const geometry::RelativePoseError error(loop.T_match_query, loop.sqrt_information);
+  Eigen::Matrix<double, 6, 1> residual;
+  error(a.q_map_camera.coeffs().data(), a.t_map_camera.data(), b.q_map_camera.coeffs().data(),
+        b.t_map_camera.data(), residual.data());
+  return residual.squaredNorm();
+}
+
+std::vector<bool> PoseGraph::WindowAroundLoops(std::size_t first_loop) const {
+  std::vector<std::vector<std::size_t>> loop_partners(keyframes_.size());
+  for (const Loop& loop : loops_) {
+    loop_partners[loop.match].push_back(loop.query);
+    loop_partners[loop.query].push_back(loop.match);
+  }
+  std::vector<int> hops(keyframes_.size(), -1);
+  std::deque<std::size_t> frontier;
+  for (std::size_t l = first_loop; l < loops_.size(); ++l) {
+    for (const std::size_t end : {loops_[l].match, loops_[l].query}) {
+      if (hops[end] < 0) {
+        hops[end] = 0;
+        frontier.push_back(end);
+      }
+    }
+  }
+  std::size_t size = frontier.size();
+  while (!frontier.empty() && size < static_cast<std::size_t>(options_.local_keyframes)) {
+    const std::size_t i = frontier.front();
+    frontier.pop_front();
+    std::vector<std::size_t> neighbours = loop_partners[i];
+    if (i > 0 && keyframes_[i - 1].segment == keyframes_[i].segment) neighbours.push_back(i - 1);
+    if (i + 1 < keyframes_.size() && keyframes_[i + 1].segment == keyframes_[i].segment) {
+      neighbours.push_back(i + 1);
+    }
+    for (const std::size_t n : neighbours) {
+      if (hops[n] >= 0 || size == static_cast<std::size_t>(options_.local_keyframes)) continue;
+      hops[n] = hops[i] + 1;
+      frontier.push_back(n);
+      ++size;
+    }
+  }
+  std::vector<bool> window(keyframes_.size());
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) window[i] = hops[i] >= 0;
+  return window;
+}
+
 PoseGraphSummary PoseGraph::Optimize() {
   PoseGraphSummary result;
   // Without loops every component follows its odometry, which the map poses already do.
   if (loops_.empty()) return result;
-
+  bool local = optimised_ && options_.local_keyframes > 0 && loops_optimised_ < loops_.size();
+  for (std::size_t l = loops_optimised_; local && l < loops_.size(); ++l) {
+    local = LoopChiSquare(loops_[l]) < options_.consistent_loop_chi2;
+  }
+  // Keyframes whose poses move: in a local optimisation the window around the new loops, else
+  // every keyframe of a component with loops. Edges with one end outside hold it fixed.
+  std::vector<bool> moving;
+  if (local) {
+    moving = WindowAroundLoops(loops_optimised_);
+  } else {
+    moving.resize(keyframes_.size());
+    for (std::size_t i = 0; i < keyframes_.size(); ++i) {
+      moving[i] = segments_[ComponentOf(keyframes_[i].segment)].loops > 0;
+    }
+  }
   // Shared by all residual blocks, hence not owned by the problem.
   ceres::EigenQuaternionManifold quaternion_manifold;
   ceres::CauchyLoss loop_loss(options_.loop_loss_scale);
@@ -139,15 +201,10 @@ PoseGraphSummary PoseGraph::Optimize() {
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-
-  std::vector<bool> optimised(segments_.size());
-  for (std::size_t s = 0; s < segments_.size(); ++s) {
-    optimised[s] = segments_[ComponentOf(static_cast<int>(s))].loops > 0;
-  }
   for (std::size_t i = 1; i < keyframes_.size(); ++i) {
     Keyframe& a = keyframes_[i - 1];
     Keyframe& b = keyframes_[i];
-    if (a.segment != b.segment || !optimised[b.segment]) continue;
+    if (a.segment != b.segment || !(moving[i - 1] || moving[i])) continue;
     problem.AddResidualBlock(
         geometry::RelativePoseError::Create(a.T_odom_camera.inverse() * b.T_odom_camera,
                                             odometry_sqrt_information_),
@@ -155,6 +212,7 @@ PoseGraphSummary PoseGraph::Optimize() {
         b.q_map_camera.coeffs().data(), b.t_map_camera.data());
   }
   for (const Loop& loop : loops_) {
+    if (!(moving[loop.match] || moving[loop.query])) continue;
     Keyframe& a = keyframes_[loop.match];
     Keyframe& b = keyframes_[loop.query];
     problem.AddResidualBlock(
@@ -162,18 +220,29 @@ PoseGraphSummary PoseGraph::Optimize() {
         a.q_map_camera.coeffs().data(), a.t_map_camera.data(), b.q_map_camera.coeffs().data(),
         b.t_map_camera.data());
   }
-  for (Keyframe& keyframe : keyframes_) {
-    double* rotation = keyframe.q_map_camera.coeffs().data();
-    if (problem.HasParameterBlock(rotation)) problem.SetManifold(rotation, &quaternion_manifold);
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) {
+    double* rotation = keyframes_[i].q_map_camera.coeffs().data();
+    if (!problem.HasParameterBlock(rotation)) continue;
+    problem.SetManifold(rotation, &quaternion_manifold);
+    if (!moving[i]) {
+      problem.SetParameterBlockConstant(rotation);
+      problem.SetParameterBlockConstant(keyframes_[i].t_map_camera.data());
+    } else {
+      ++result.moved_keyframes;
+    }
   }
-  // Gauge: each component's oldest keyframe, the first of its root segment.
+  // Gauge: each component's oldest keyframe, the first of its root segment. (A local window
+  // that does not reach it is held by the fixed keyframes around it.)
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     if (segments_[s].parent != static_cast<int>(s) || segments_[s].loops == 0) continue;
     Keyframe& oldest = keyframes_[segments_[s].first];
+    if (!moving[segments_[s].first] || !problem.HasParameterBlock(oldest.t_map_camera.data())) {
+      continue;
+    }
     problem.SetParameterBlockConstant(oldest.q_map_camera.coeffs().data());
     problem.SetParameterBlockConstant(oldest.t_map_camera.data());
+    --result.moved_keyframes;
   }
-
   ceres::Solver::Options solver_options;
   // Each pose couples to its neighbours and a few loop partners: a very sparse normal matrix
   // that a fill-reducing sparse Cholesky factors in a few milliseconds per iteration.
@@ -183,8 +252,12 @@ PoseGraphSummary PoseGraph::Optimize() {
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
-
-  for (Keyframe& keyframe : keyframes_) keyframe.q_map_camera.normalize();
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) {
+    if (moving[i]) keyframes_[i].q_map_camera.normalize();
+  }
+  loops_optimised_ = loops_.size();
+  optimised_ = true;
+  result.local = local;
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
   result.initial_cost = summary.initial_cost;

@@ -272,7 +272,9 @@ void BackendNodelet::Work() {
     }
     if (AddReadyLoops(&graph, &pending_loops)) {
       const backend::PoseGraphSummary summary = graph.Optimize();
-      NODELET_INFO("pose graph: %zu keyframes optimised in %d iterations", graph.size(),
+      NODELET_INFO("pose graph: %zu of %zu keyframes optimised (%s) in %d iterations",
+                   summary.moved_keyframes, graph.size(),
+                   summary.local ? "near loops that agree with the map" : "whole graph",
                    summary.iterations);
     }
     if (!localization_ && graph.size() > 0) {

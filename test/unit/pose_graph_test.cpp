@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -301,6 +302,52 @@ TEST(PoseGraphTest, LoopCostIsMahalanobisDistance) {
   EXPECT_NEAR(graph.Optimize().initial_cost, expected, 1e-9 * expected);
 }
 
+// After the loops of the second lap are closed, one more loop that agrees with the map (a
+// revisit measured from the truth) moves only the keyframes nearest it in the graph, and the
+// map it leaves is within TOLERANCE of what optimising the whole graph gives.
+TEST(PoseGraphTest, ALoopThatAgreesWithTheMapMovesOnlyKeyframesNearIt) {
+  const std::vector<Eigen::Isometry3d> truth = Circle();
+  PoseGraphOptions options;
+  options.local_keyframes = 30;
+  PoseGraph local = DriftingCircle(options);
+  options.local_keyframes = 0;
+  PoseGraph whole = DriftingCircle(options);
+  for (PoseGraph* graph : {&local, &whole}) {
+    AddTrueLoops(truth, graph);
+    EXPECT_FALSE(graph->Optimize().local) << "the first optimisation is of the whole graph";
+  }
+  const std::map<std::int64_t, Eigen::Isometry3d> before = local.MapPoses();
+  for (PoseGraph* graph : {&local, &whole}) graph->AddLoop(TrueLoop(truth, 10, 90));
+  const backend::PoseGraphSummary summary = local.Optimize();
+  EXPECT_TRUE(summary.local);
+  EXPECT_LE(summary.moved_keyframes, 30u);
+  EXPECT_FALSE(whole.Optimize().local);
+  int unmoved = 0;
+  double difference = 0;
+  for (const auto& [id, pose] : local.MapPoses()) {
+    unmoved += IsNear(pose, before.at(id), 0) ? 1 : 0;
+    difference =
+        std::max(difference, (pose.translation() - whole.MapPose(id).translation()).norm());
+  }
+  EXPECT_EQ(unmoved, kKeyframes - static_cast<int>(summary.moved_keyframes));
+  // The loop is 2 cm and 0.2 degrees sure; after the second lap's loops it disagrees with the map
+  // by millimetres, which the window takes up. What optimising everything does beyond the window
+  // is a fraction of that (0.27 mm here): 1 mm is 4 times it and a twentieth of the loop's sigma.
+  EXPECT_LT(difference, 0.001);
+}
+
+// A loop that disagrees with the map by 15 sigmas (30 cm) is drift to remove: the whole graph.
+TEST(PoseGraphTest, ALoopThatDisagreesWithTheMapOptimisesTheWholeGraph) {
+  const std::vector<Eigen::Isometry3d> truth = Circle();
+  PoseGraph graph = DriftingCircle();
+  AddTrueLoops(truth, &graph);
+  graph.Optimize();
+  graph.AddLoop(Loop(10, 90, truth[10].inverse() * truth[90] * Pose({0.3, 0, 0}, 0)));
+  const backend::PoseGraphSummary summary = graph.Optimize();
+  EXPECT_FALSE(summary.local);
+  EXPECT_EQ(summary.moved_keyframes, static_cast<std::size_t>(kKeyframes - 1));  // all but gauge
+}
+
 TEST(PoseGraphTest, OdometryUpdatesMoveEdges) {
   PoseGraph graph = DriftingCircle();
   const Eigen::Isometry3d moved = Pose(Eigen::Vector3d(1, 2, 3), 0.4);
@@ -370,7 +417,9 @@ TEST(PoseGraphTest, VisitListsEveryFieldOnce) {
             "  odometry_translation_sigma: 0.02\n"
             "  odometry_rotation_sigma_deg: 0.1\n"
             "  loop_loss_scale: 3.5\n"
-            "  iterations: 30\n");
+            "  iterations: 30\n"
+            "  consistent_loop_chi2: 16.8\n"
+            "  local_keyframes: 200\n");
 }
 
 }  // namespace

@@ -30,7 +30,9 @@ struct PoseGraphSummary {
   bool converged = true;
   int iterations = 0;       // 0: nothing to optimise (no loop edges)
   double initial_cost = 0;  // Ceres' cost, half the sum of squared whitened (robustified) errors
-  double final_cost = 0;
+  double final_cost = 0;    // (of the edges in the problem: the window's when local)
+  bool local = false;       // only keyframes near the new loops moved (see Optimize())
+  std::size_t moved_keyframes = 0;  // keyframes whose poses were optimised
 };
 
 // Keyframe poses in a map frame made consistent by loop closures. Nodes: keyframes, whose
@@ -65,7 +67,13 @@ class PoseGraph {
   // Sets a keyframe's map pose as a saved map had it (after AddKeyframe and AddLoop have rebuilt
   // the graph); throws for unknown ids.
   void RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera);
-  // Optimises the components that have loops, from the current map poses.
+  // Optimises the components that have loops, from the current map poses. When every loop added
+  // since the last Optimize() already agrees with the map (its squared whitened error below
+  // options.consistent_loop_chi2), only the options.local_keyframes keyframes nearest those
+  // loops in the graph move, against their fixed neighbours: such a loop corrects little, and
+  // near it. On a route driven again and again a loop comes with nearly every keyframe, and
+  // optimising the whole graph for each grows with the laps. The first Optimize(), a loop that
+  // disagrees, and local_keyframes 0 optimise every component with loops.
   PoseGraphSummary Optimize();
 
   bool Contains(std::int64_t id) const;
@@ -114,6 +122,11 @@ class PoseGraph {
 
   std::size_t IndexOf(std::int64_t id) const;  // throws std::invalid_argument
   int ComponentOf(int segment) const;          // the root segment
+  // The squared whitened error of a loop at the current map poses.
+  double LoopChiSquare(const Loop& loop) const;
+  // The options_.local_keyframes keyframes (by index) nearest the loops from index first_loop on,
+  // in edges (odometry or loop), breadth first.
+  std::vector<bool> WindowAroundLoops(std::size_t first_loop) const;
 
   PoseGraphOptions options_;
   Eigen::Matrix<double, 6, 6> odometry_information_;
@@ -121,6 +134,8 @@ class PoseGraph {
   std::vector<Keyframe> keyframes_;  // by increasing id
   std::vector<Loop> loops_;
   std::vector<Segment> segments_;
+  std::size_t loops_optimised_ = 0;  // loops_[0, loops_optimised_) were in an Optimize()
+  bool optimised_ = false;           // an Optimize() has run over every component with loops
 };
 
 }  // namespace stereo_fabmap_slam::backend
