@@ -152,13 +152,20 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
       Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability);
   detection.new_place_probability = places.new_place_probability;
   detection.places_compared = places.places_compared;
+  // Verified best posterior first, until one is accepted (as ORB-SLAM verifies its candidates):
+  // verification is most of a detection's time (descriptor matching, PnP RANSAC, refinement),
+  // and on a route driven again the first candidate is the place in nearly every keyframe.
   for (const PlaceCandidate& place : places.candidates) {
-    LoopCandidate verified = Verify(query, database_.Get(place.keyframe_id));
+    LoopCandidate verified;
+    if (detection.loop) {
+      verified.keyframe_id = place.keyframe_id;
+      verified.reason = "not verified: a candidate of higher posterior was accepted";
+    } else {
+      verified = Verify(query, database_.Get(place.keyframe_id));
+    }
     verified.probability = place.probability;
     verified.edge.probability = verified.probability;
-    if (verified.accepted && (!detection.loop || verified.inliers > detection.loop->inliers)) {
-      detection.loop = verified.edge;
-    }
+    if (verified.accepted) detection.loop = verified.edge;
     detection.candidates.push_back(std::move(verified));
   }
   return detection;
@@ -168,6 +175,7 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
                                    const map::StoredKeyframe& candidate) const {
   LoopCandidate result;
   result.keyframe_id = candidate.keyframe.id;
+  result.verified = true;
   const features::StereoFeatures& q = query.keyframe.features;
   const features::StereoFeatures& c = candidate.keyframe.features;
 

@@ -107,6 +107,7 @@ LoopCounts WriteLoops(const pipeline::StereoSlam& slam, const std::string& path)
     counts.detection_ms.push_back(frame.timing.loop_detection_ms);
     counts.pose_graph_ms_max = std::max(counts.pose_graph_ms_max, frame.timing.pose_graph_ms);
     for (const place_recognition::LoopCandidate& c : frame.loop_detection->candidates) {
+      if (!c.verified) continue;
       std::fprintf(file, "%ld,%.9f,%ld,%.9f,%.6f,%d,%d,\"%s\"\n",
                    static_cast<long>(frame.loop_detection->query_id), frame.timestamp,
                    static_cast<long>(c.keyframe_id), slam.KeyframeTime(c.keyframe_id),

@@ -2,8 +2,10 @@
 // accepted with the right relative pose; look-alikes elsewhere, which match perfectly by
 // themselves, are rejected: a repeated room by the odometry check within one segment, a
 // repeated poster by the spread check even across segments (where no odometry relates the two
-// keyframes).
+// keyframes); candidates after an accepted one are not verified.
 #include "stereo_fabmap_slam/place_recognition/loop_detector.h"
+
+#include <algorithm>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -104,6 +106,35 @@ TEST(LoopDetector, TrueRevisitIsAcceptedWithItsRelativePose) {
   EXPECT_LT((detection.loop->T_match_query.translation() - Eigen::Vector3d(0.1, 0, 0)).norm(),
             1e-3);
   EXPECT_GE(detection.loop->inliers, 200);
+}
+
+// Two earlier views of A, both good loops (and B, whose posters make it a candidate that fails):
+// candidates are verified best posterior first until one is accepted, and those after it are
+// not verified at all (verification is most of a detection's time).
+TEST(LoopDetector, CandidatesAfterAnAcceptedOneAreNotVerified) {
+  const StereoWorld world = PosterWorld();
+  place_recognition::LoopDetector detector = MakeDetector();
+  detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+  detector.Process(MakeKeyframe(1, 1.0, world, At(0.05, 0, 0), At(0.05, 0, 0)));
+  detector.Process(MakeKeyframe(2, 10.0, world, At(20, 0, 0), At(20, 0, 0)));
+  const LoopDetection detection =
+      detector.Process(MakeKeyframe(3, 20.0, world, At(0.1, 0, 0), At(0.25, 0, 0)));
+  ASSERT_TRUE(detection.loop.has_value());
+  const auto accepted = std::find_if(detection.candidates.begin(), detection.candidates.end(),
+                                     [](const LoopCandidate& c) { return c.accepted; });
+  ASSERT_NE(accepted, detection.candidates.end());
+  EXPECT_TRUE(accepted->keyframe_id == 0 || accepted->keyframe_id == 1) << accepted->keyframe_id;
+  EXPECT_EQ(detection.loop->match_id, accepted->keyframe_id);
+  for (auto c = detection.candidates.begin(); c != accepted; ++c) {
+    EXPECT_TRUE(c->verified && !c->accepted) << c->keyframe_id << ": " << c->reason;
+  }
+  ASSERT_NE(accepted + 1, detection.candidates.end()) << "the other view of A is a candidate";
+  for (auto c = accepted + 1; c != detection.candidates.end(); ++c) {
+    EXPECT_FALSE(c->verified) << c->keyframe_id;
+    EXPECT_FALSE(c->accepted) << c->keyframe_id;
+    EXPECT_NE(c->reason.find("not verified"), std::string::npos) << c->reason;
+    EXPECT_LE(c->probability, accepted->probability);
+  }
 }
 
 // A room repeated exactly 20 m further on (the same objects in the same layout, as in an office

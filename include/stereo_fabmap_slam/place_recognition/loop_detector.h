@@ -22,8 +22,9 @@ struct LoopCandidate {
   double probability = 0;  // FAB-MAP posterior
   int matches = 0;         // descriptor matches to its stereo points
   int inliers = 0;         // after RANSAC and refinement
+  bool verified = false;   // false: a candidate before it was accepted, this one not tried
   bool accepted = false;
-  std::string reason;  // why rejected; "accepted" otherwise
+  std::string reason;  // why rejected or not verified; "accepted" otherwise
   map::LoopEdge edge;  // meaningful if accepted
 };
 
@@ -45,7 +46,7 @@ struct LoopDetection {
   double new_place_probability = 1;
   int places_compared = 0;                // keyframes old enough to be loops
   std::vector<LoopCandidate> candidates;  // best FAB-MAP posterior first
-  // The accepted candidate with the most inliers, if any.
+  // The first candidate accepted, if any; the candidates after it are not verified.
   std::optional<map::LoopEdge> loop;
 };
 
