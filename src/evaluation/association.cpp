@@ -68,11 +68,11 @@ std::vector<AssociatedPair> AssociateByTimestamp(const Trajectory& reference,
   // most once, one of the searched side may be used by several.
   const bool estimate_longer = estimate.size() > reference.size();
   const Trajectory& searching = estimate_longer ? reference : estimate;
-  const NearestInTime searched(estimate_longer ? estimate : reference);
+  const Trajectory& searched = estimate_longer ? estimate : reference;
+  const NearestInTime nearest_in_searched(searched);
   for (std::size_t i = 0; i < searching.size(); ++i) {
-    const std::size_t nearest = searched.Find(searching[i].timestamp);
-    const Trajectory& other = estimate_longer ? estimate : reference;
-    if (!(std::abs(other[nearest].timestamp - searching[i].timestamp) <= max_dt)) continue;
+    const std::size_t nearest = nearest_in_searched.Find(searching[i].timestamp);
+    if (!(std::abs(searched[nearest].timestamp - searching[i].timestamp) <= max_dt)) continue;
     pairs.push_back(estimate_longer ? AssociatedPair{i, nearest} : AssociatedPair{nearest, i});
   }
   return pairs;

@@ -30,6 +30,7 @@
 
 #include "euroc_bag_fixture.h"
 #include "ros_conversions.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "test_support.h"
 
@@ -278,12 +279,10 @@ double LongestOdometryGap(const GraphRun& run) {
   return longest;
 }
 
-// The stamp [s] of the subset's last stereo pair: its cam0 list's last row.
+// The stamp [s] of the subset's last stereo pair.
 double LastImageStamp(const std::string& sequence) {
-  const std::string rows = ReadTextFile(EurocSequencePath(sequence) + "/mav0/cam0/data.csv");
-  std::size_t end = rows.find_last_not_of("\r\n");
-  const std::size_t start = rows.rfind('\n', end);
-  return std::stod(rows.substr(start + 1, rows.find(',', start + 1) - start - 1)) * 1e-9;
+  return datasets::EurocSequence::Open(EurocSequencePath(sequence)).frames().back().timestamp_ns *
+         1e-9;
 }
 
 // 2x and 10x. At both, odometry goes on to the end of the bag, pairs are skipped whole (never

@@ -257,8 +257,8 @@ TEST(EvaluatePlaceRecognitionTool, InputWithoutImagesIsAnError) {
                        &output),
             0);
   WriteTextFile(temp.path() + "/gt.csv", "1\n");
-  EXPECT_NE(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() +
-                           " --gt " + temp.path() + "/gt.csv 2>&1",
+  EXPECT_NE(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() + " --gt " +
+                           temp.path() + "/gt.csv 2>&1",
                        &output),
             0);
   EXPECT_NE(output.find("no images"), std::string::npos) << output;

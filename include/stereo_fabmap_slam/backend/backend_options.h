@@ -52,7 +52,8 @@ struct PoseGraphOptions {
   // take in tens of metres of odometry around it and the keyframes of the earlier passes that
   // loops joined to it, and solve in tens of milliseconds however large the map (a 2,100-keyframe
   // graph with 2,000 loops, rendered laps: 0.7 s for the whole, 30 ms for 200, the same
-  // accuracy). 0: every Optimize() optimises the whole graph.
+  // accuracy; the 10-minute rendered route of make bench-long: ATE 1.23 cm against 1.15 cm).
+  // 0: every Optimize() optimises the whole graph.
   int local_keyframes = 200;
 
   void Visit(io::OptionVisitor& visitor);
