@@ -4,7 +4,7 @@
 # Prints how memory grows with the keyframes (bytes per keyframe, a least-squares line through
 # the resident memory every 100 frames), whether per-frame tracking time grows with the map
 # (first against last minute), and FAB-MAP and pose-graph times at the end.
-# About 20 minutes on 2 cores: rendering ~11, the run ~8.
+# About 20 minutes on 2 cores: rendering ~11, the run ~9 (13 on a slower machine of this kind).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH=/usr/bin:$PATH
@@ -64,4 +64,17 @@ print(f"| inliers median, first / last minute | "
 print(f"| loop detection median, last minute [ms] | {median(loops_last):.2f} |")
 print(f"| pose graph median / max, last minute [ms] | {median(graph_last):.1f} / {max(graph_last) if graph_last else float('nan'):.1f} |")
 print(f"| peak RSS [MB] | {summary['peak_rss_mb']:.0f} |")
+# Minute by minute: a time that grows with the map grows in every row, as the keyframes do; a
+# first minute apart from the rest is the map filling its window (local map, bundle adjustment).
+print()
+print("| minute | keyframes at its end | detection | description | stereo | tracking | per-frame total | loop detection [ms, medians] |")
+print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+keyframes = 0
+for start in range(0, len(rows), minute):
+    part = rows[start:start + minute]
+    keyframes += sum(1 for r in part if r["keyframe"] not in ("", "0"))
+    stages = " | ".join(f"{median(column(stage + '_ms', part)):.2f}"
+                        for stage in ("detection", "description", "stereo", "tracking"))
+    loops = [v for v in column("loop_detection_ms", part) if v > 0]
+    print(f"| {start // minute + 1} | {keyframes} | {stages} | {track(part):.2f} | {median(loops):.2f} |")
 PYTHON

@@ -25,15 +25,27 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
                                         const cv::Mat& left_descriptors, const cv::Mat& right_image,
                                         const std::vector<cv::KeyPoint>& right,
                                         const cv::Mat& right_descriptors) const {
-  // Right key points by image row, so that each left point looks only at its row band.
+  // Right key points by image row, so that each left point looks only at its row band: row r's
+  // are by_row[row_start[r]] to by_row[row_start[r + 1] - 1], in key point order. Sorted by
+  // counting into one array: a vector per row cost a few thousand small allocations a frame,
+  // and over a long run the fragmented heap made them slower and slower (docs/benchmarks.md).
   const int rows = right_image.rows;
-  std::vector<std::vector<int>> by_row(static_cast<std::size_t>(rows));
   const int band = static_cast<int>(std::ceil(options_.max_row_difference));
-  for (int j = 0; j < static_cast<int>(right.size()); ++j) {
+  const auto row_band = [&](int j) {
     const int row = static_cast<int>(std::lround(right[j].pt.y));
-    for (int r = std::max(0, row - band); r <= std::min(rows - 1, row + band); ++r) {
-      by_row[static_cast<std::size_t>(r)].push_back(j);
-    }
+    return std::make_pair(std::max(0, row - band), std::min(rows - 1, row + band));
+  };
+  std::vector<int> row_start(static_cast<std::size_t>(rows) + 1, 0);
+  for (int j = 0; j < static_cast<int>(right.size()); ++j) {
+    const auto [first, last] = row_band(j);
+    for (int r = first; r <= last; ++r) ++row_start[static_cast<std::size_t>(r) + 1];
+  }
+  for (int r = 0; r < rows; ++r) row_start[r + 1] += row_start[r];
+  std::vector<int> by_row(static_cast<std::size_t>(row_start.back()));
+  std::vector<int> next(row_start.begin(), row_start.end() - 1);
+  for (int j = 0; j < static_cast<int>(right.size()); ++j) {
+    const auto [first, last] = row_band(j);
+    for (int r = first; r <= last; ++r) by_row[static_cast<std::size_t>(next[r]++)] = j;
   }
   const double min_disparity = camera_.fx * camera_.baseline / options_.max_depth;
   const double max_disparity =
@@ -42,6 +54,7 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
   std::vector<float> u_right(left.size(), -1.0f);
   // Each left key point is matched on its own: two halves on two threads, same result.
   const auto match_range = [&](int begin, int end) {
+    std::vector<int> costs;  // RefineColumn's, one allocation for the range
     for (int i = begin; i < end; ++i) {
       const cv::Point2f& p = left[i].pt;
       const int row = std::clamp(static_cast<int>(std::lround(p.y)), 0, rows - 1);
@@ -51,7 +64,8 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
           uses_descriptors()
               ? Patch{}
               : MakePatch(left_image, cv::Point(static_cast<int>(std::lround(p.x)), row));
-      for (const int j : by_row[static_cast<std::size_t>(row)]) {
+      for (int k = row_start[row]; k < row_start[row + 1]; ++k) {
+        const int j = by_row[static_cast<std::size_t>(k)];
         const cv::Point2f& q = right[j].pt;
         const double disparity = p.x - q.x;
         if (std::abs(q.y - p.y) > options_.max_row_difference || disparity < 0 ||
@@ -76,7 +90,7 @@ std::vector<float> StereoMatcher::Match(const cv::Mat& left_image,
           uses_descriptors() ? max_descriptor_distance_ : options_.max_patch_distance;
       if (best_j < 0 || best > limit || best > options_.ratio * second) continue;
       float column = right[best_j].pt.x;
-      if (options_.subpixel) column = RefineColumn(left_image, p, right_image, column);
+      if (options_.subpixel) column = RefineColumn(left_image, p, right_image, column, &costs);
       if (column < 0) continue;
       const double disparity = p.x - column;
       if (disparity >= min_disparity && disparity <= max_disparity) u_right[i] = column;
@@ -138,7 +152,8 @@ double StereoMatcher::PatchDistance(const Patch& left, const cv::Mat& right_imag
 }
 
 float StereoMatcher::RefineColumn(const cv::Mat& left_image, const cv::Point2f& left_point,
-                                  const cv::Mat& right_image, float right_column) const {
+                                  const cv::Mat& right_image, float right_column,
+                                  std::vector<int>* costs_buffer) const {
   const int r = options_.patch_radius, search = options_.search_radius;
   const int ul = static_cast<int>(std::lround(left_point.x));
   const int v = static_cast<int>(std::lround(left_point.y));
@@ -149,7 +164,8 @@ float StereoMatcher::RefineColumn(const cv::Mat& left_image, const cv::Point2f& 
   }
   // Patches minus their centre value, so that a brightness offset between cameras cancels.
   const int left_centre = left_image.at<std::uint8_t>(v, ul);
-  std::vector<int> costs;
+  std::vector<int>& costs = *costs_buffer;
+  costs.clear();
   for (int offset = -search - 1; offset <= search + 1; ++offset) {
     const int right_centre = right_image.at<std::uint8_t>(v, ur + offset);
     int cost = 0;

@@ -6,7 +6,6 @@
 #include <future>
 #include <limits>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "stereo_fabmap_slam/features/descriptor_matching.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
@@ -81,14 +80,17 @@ std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFe
   points.reserve(local_map_.points().size());
   for (const auto& entry : local_map_.points()) points.push_back(&entry.second);  // id order
 
-  // Best map point for each key point; ties go to the lower point id, so that the result does
-  // not depend on how the points are split between threads.
-  using BestByKeypoint = std::unordered_map<int, Match>;
+  // Best map point for each key point (none while `point` is null); ties go to the lower point
+  // id, so that the result does not depend on how the points are split between threads. A
+  // vector by key point, not a hash map: no allocation per match (a long run's fragmented heap
+  // makes many small allocations slower and slower, docs/benchmarks.md), and key point order
+  // for free.
+  using BestByKeypoint = std::vector<Match>;
   const auto keep_better = [](BestByKeypoint* best, const Match& m) {
-    auto [it, inserted] = best->try_emplace(m.keypoint, m);
-    if (!inserted && (m.distance < it->second.distance ||
-                      (m.distance == it->second.distance && m.point->id < it->second.point->id))) {
-      it->second = m;
+    Match& current = (*best)[static_cast<std::size_t>(m.keypoint)];
+    if (current.point == nullptr || m.distance < current.distance ||
+        (m.distance == current.distance && m.point->id < current.point->id)) {
+      current = m;
     }
   };
   const auto search = [&](std::size_t begin, std::size_t end, BestByKeypoint* best_by_keypoint) {
@@ -120,23 +122,25 @@ std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFe
     }
   };
 
-  BestByKeypoint best_by_keypoint;
+  const Match none{nullptr, -1, 0.0};
+  BestByKeypoint best_by_keypoint(features.keypoints.size(), none);
   if (options_.parallel) {
-    BestByKeypoint second_half;
+    BestByKeypoint second_half(features.keypoints.size(), none);
     const std::size_t middle = points.size() / 2;
     std::future<void> worker =
         std::async(std::launch::async, search, middle, points.size(), &second_half);
     search(0, middle, &best_by_keypoint);
     worker.get();
-    for (const auto& entry : second_half) keep_better(&best_by_keypoint, entry.second);
+    for (const Match& m : second_half) {
+      if (m.point != nullptr) keep_better(&best_by_keypoint, m);
+    }
   } else {
     search(0, points.size(), &best_by_keypoint);
   }
   std::vector<Match> matches;
-  matches.reserve(best_by_keypoint.size());
-  for (const auto& entry : best_by_keypoint) matches.push_back(entry.second);
-  std::sort(matches.begin(), matches.end(),
-            [](const Match& a, const Match& b) { return a.keypoint < b.keypoint; });
+  for (const Match& m : best_by_keypoint) {
+    if (m.point != nullptr) matches.push_back(m);
+  }
   return matches;
 }
 

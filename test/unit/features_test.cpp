@@ -11,6 +11,7 @@
 #include "stereo_fabmap_slam/features/adaptive_detector.h"
 #include "stereo_fabmap_slam/features/anms.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
+#include "stereo_fabmap_slam/features/keypoint_grid.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 #include "test_support.h"
 
@@ -141,6 +142,39 @@ TEST_F(RealStereoPair, PatchAndDescriptorStereoMatchingAgree) {
   ASSERT_GT(both, 100);
   // Two independent ways of finding the right image point: they must find the same one.
   EXPECT_GE(agree, 0.97 * both) << agree << " of " << both;
+}
+
+// The grid's radius search against a brute-force one: every key point within the radius once,
+// none outside, over random points that include cell borders, image edges and points off the
+// image (binned into the border cells), and cells with several points.
+TEST(KeypointGrid, RadiusSearchFindsExactlyThePointsWithinTheRadius) {
+  const cv::Size size(752, 480);
+  const int cell = 16;
+  cv::RNG rng(7);
+  std::vector<cv::KeyPoint> keypoints;
+  for (int i = 0; i < 600; ++i) {
+    keypoints.emplace_back(rng.uniform(-5.0F, 757.0F), rng.uniform(-5.0F, 485.0F), 7.0F);
+  }
+  for (int i = 0; i < 40; ++i) {  // exactly on cell borders
+    keypoints.emplace_back(static_cast<float>(cell * rng.uniform(0, 48)),
+                           static_cast<float>(cell * rng.uniform(0, 31)), 7.0F);
+  }
+  const features::KeypointGrid grid(keypoints, size, cell);
+  int compared = 0;
+  for (int query = 0; query < 300; ++query) {
+    const double u = rng.uniform(-20.0, 772.0), v = rng.uniform(-20.0, 500.0);
+    const double radius = rng.uniform(0.5, 40.0);
+    std::multiset<int> found;
+    grid.ForEachWithin(u, v, radius, [&](int i) { found.insert(i); });
+    std::multiset<int> expected;
+    for (int i = 0; i < static_cast<int>(keypoints.size()); ++i) {
+      const double du = keypoints[i].pt.x - u, dv = keypoints[i].pt.y - v;
+      if (du * du + dv * dv <= radius * radius) expected.insert(i);
+    }
+    EXPECT_EQ(found, expected) << "query (" << u << ", " << v << ") radius " << radius;
+    compared += static_cast<int>(expected.size());
+  }
+  EXPECT_GT(compared, 300) << "the queries must find points to compare";
 }
 
 TEST(FeatureFactory, UnknownNamesListWhatIsAvailable) {

@@ -46,9 +46,9 @@ class StereoMatcher {
   // patch leaves its image or has no texture.
   double PatchDistance(const Patch& left, const cv::Mat& right_image, const cv::Point& right) const;
   // Sub-pixel right column around a key-point match, or a negative value if the correlation has
-  // no clear minimum inside the search window.
+  // no clear minimum inside the search window. `costs` is scratch space, reused by the caller.
   float RefineColumn(const cv::Mat& left_image, const cv::Point2f& left_point,
-                     const cv::Mat& right_image, float right_column) const;
+                     const cv::Mat& right_image, float right_column, std::vector<int>* costs) const;
 
   StereoMatcherOptions options_;
   geometry::StereoCamera camera_;
