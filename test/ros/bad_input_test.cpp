@@ -148,6 +148,21 @@ class BadInputTest : public ::testing::Test {
     return HasOdometry(stamp);
   }
 
+  // One camera ("left" or "right") drops out for 1.8 s (12 images of the other): nothing to
+  // track, a warning that names the camera, and tracking when pairs arrive again.
+  void CheckCameraDroppingOut(const std::string& camera) {
+    const datasets::StereoImages pair = SomePair();
+    for (int i = 0; i < 12; ++i) {
+      const std::int64_t t = NextStamp();
+      Send(pair.left, pair.right, sensor_msgs::image_encodings::MONO8, t,
+           /*send_left=*/camera != "left", /*send_right=*/camera != "right");
+      EXPECT_FALSE(HasOdometry(t));
+    }
+    EXPECT_TRUE(Logged("no " + camera + " images for")) << "a dropout is named as such";
+    EXPECT_TRUE(TrackRealFrames(4)) << "tracking must resume when pairs arrive again";
+    EXPECT_TRUE(Logged("stereo pairs arrive again"));
+  }
+
   // A pair of V101_micro to corrupt.
   datasets::StereoImages SomePair() { return sequence_.LoadStereoPair(5); }
 
@@ -213,32 +228,12 @@ TEST_F(BadInputTest, SizeOtherThanTheCalibrationsIsSkippedAndNamed) {
   EXPECT_TRUE(TrackRealFrames(2)) << "tracking goes on after the skipped pair";
 }
 
-// One camera drops out for 1.8 s (12 images of the other): nothing to track, a warning that
-// names the camera, and tracking when pairs arrive again.
 TEST_F(BadInputTest, RightCameraDroppingOutIsNamedAndTrackingResumes) {
-  const datasets::StereoImages pair = SomePair();
-  for (int i = 0; i < 12; ++i) {
-    const std::int64_t t = NextStamp();
-    Send(pair.left, pair.right, sensor_msgs::image_encodings::MONO8, t, /*send_left=*/true,
-         /*send_right=*/false);
-    EXPECT_FALSE(HasOdometry(t));
-  }
-  EXPECT_TRUE(Logged("no right images for")) << "a dropout is named as such";
-  EXPECT_TRUE(TrackRealFrames(4)) << "tracking must resume when pairs arrive again";
-  EXPECT_TRUE(Logged("stereo pairs arrive again"));
+  CheckCameraDroppingOut("right");
 }
 
 TEST_F(BadInputTest, LeftCameraDroppingOutIsNamedAndTrackingResumes) {
-  const datasets::StereoImages pair = SomePair();
-  for (int i = 0; i < 12; ++i) {
-    const std::int64_t t = NextStamp();
-    Send(pair.left, pair.right, sensor_msgs::image_encodings::MONO8, t, /*send_left=*/false,
-         /*send_right=*/true);
-    EXPECT_FALSE(HasOdometry(t));
-  }
-  EXPECT_TRUE(Logged("no left images for")) << "a dropout is named as such";
-  EXPECT_TRUE(TrackRealFrames(4)) << "tracking must resume when pairs arrive again";
-  EXPECT_TRUE(Logged("stereo pairs arrive again"));
+  CheckCameraDroppingOut("left");
 }
 
 TEST_F(BadInputTest, BlankImagesLoseTrackingAndRealFramesStartAgain) {
