@@ -81,6 +81,38 @@ Eigen::Isometry3d FitRigid(const std::vector<PnpCorrespondence>& correspondences
   return Eigen::Isometry3d(Eigen::umeyama(world, cam, false));
 }
 
+// Re-fits `best` to the correspondences `consensus` by reprojection error (Levenberg-Marquardt
+// from best's pose), recounts the inliers, and again while the re-fitted pose gathers more; keeps
+// best where a re-fit gathers fewer.
+void RefitByReprojection(const std::vector<PnpCorrespondence>& correspondences,
+                         const geometry::StereoCamera& camera, const PnpRansacOptions& options,
+                         std::vector<int> consensus, PnpResult* best) {
+  for (int refit = 0; refit < 3 && consensus.size() >= 6; ++refit) {
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
+    for (const int i : consensus) {
+      const PnpCorrespondence& c = correspondences[i];
+      object.emplace_back(c.world.x(), c.world.y(), c.world.z());
+      image.emplace_back(c.pixel.x(), c.pixel.y());
+    }
+    cv::Mat rotation_vector, translation;
+    ToOpenCv(best->T_camera_world, &rotation_vector, &translation);
+    if (!cv::solvePnP(object, image, camera.CameraMatrix(), cv::noArray(), rotation_vector,
+                      translation, /*useExtrinsicGuess=*/true, cv::SOLVEPNP_ITERATIVE)) {
+      return;
+    }
+    const Eigen::Isometry3d refined = FromOpenCv(rotation_vector, translation);
+    std::vector<int> inliers =
+        Inliers(correspondences, refined, camera, options.reprojection_threshold);
+    if (inliers.size() < best->inliers.size()) return;
+    const bool grew = inliers.size() > best->inliers.size();
+    best->T_camera_world = refined;
+    best->inliers = inliers;
+    consensus = std::move(inliers);
+    if (!grew) return;
+  }
+}
+
 PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
                         const geometry::StereoCamera& camera, const PnpRansacOptions& options) {
   // Hypotheses from close points only (within 40 baselines, where stereo depth is reliable),
@@ -117,32 +149,9 @@ PnpResult UmeyamaRansac(const std::vector<PnpCorrespondence>& correspondences,
       iterations = std::min(options.max_iterations, static_cast<int>(std::ceil(needed)));
     }
   }
-  // Stereo depth errors grow with the square of the depth and dominate a 3-D fit; re-fit the
-  // consensus set by reprojection error instead (as OpenCV does for its own kernels), and again
-  // while the re-fitted pose gathers more inliers.
-  for (int refit = 0; refit < 3 && best.success && best.inliers.size() >= 6; ++refit) {
-    std::vector<cv::Point3d> object;
-    std::vector<cv::Point2d> image;
-    for (const int i : best.inliers) {
-      const PnpCorrespondence& c = correspondences[i];
-      object.emplace_back(c.world.x(), c.world.y(), c.world.z());
-      image.emplace_back(c.pixel.x(), c.pixel.y());
-    }
-    cv::Mat rotation_vector, translation;
-    ToOpenCv(best.T_camera_world, &rotation_vector, &translation);
-    if (!cv::solvePnP(object, image, camera.CameraMatrix(), cv::noArray(), rotation_vector,
-                      translation, /*useExtrinsicGuess=*/true, cv::SOLVEPNP_ITERATIVE)) {
-      break;
-    }
-    const Eigen::Isometry3d refined = FromOpenCv(rotation_vector, translation);
-    std::vector<int> inliers =
-        Inliers(correspondences, refined, camera, options.reprojection_threshold);
-    if (inliers.size() < best.inliers.size()) break;
-    const bool grew = inliers.size() > best.inliers.size();
-    best.T_camera_world = refined;
-    best.inliers = std::move(inliers);
-    if (!grew) break;
-  }
+  // Stereo depth errors grow with the square of the depth and dominate a 3-D fit; re-fitted by
+  // reprojection error instead, as OpenCV does for its own kernels.
+  if (best.success) RefitByReprojection(correspondences, camera, options, best.inliers, &best);
   return best;
 }
 
@@ -192,6 +201,13 @@ PnpResult SolvePnpRansac(const std::vector<PnpCorrespondence>& correspondences,
   // Inliers recounted with our own test, so that every kernel is judged the same way.
   result.inliers =
       Inliers(correspondences, result.T_camera_world, camera, options.reprojection_threshold);
+  // OpenCV re-fits its consensus set with EPnP after a 3-point kernel (AP3P, P3P). On a nearly
+  // planar, repetitive scene that fit can land pixels away: on MH01's pallets OpenCV's consensus
+  // of 218 left 13 within the threshold, and the frame was lost. So the consensus is re-fitted by
+  // reprojection error from there, and the pose that keeps more inliers wins.
+  if (!inliers.empty()) {
+    RefitByReprojection(correspondences, camera, options, std::move(inliers), &result);
+  }
   result.success = result.inliers.size() >= 6;
   return result;
 }

@@ -228,19 +228,24 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
                                           << fast.log;
   }
   // Skipping a third to a half of the pairs widens the gaps the motion model bridges, and the
-  // tracker then finds the frame by descriptor. Where the bag ends, the camera passes close over
-  // blurred, repetitive pallets (at 1x a keyframe every 2-3 frames): there about half the runs
-  // on this machine lost the track once or twice (10 runs through euroc_bag.launch: 5 warned of
-  // a loss; 4 rostest runs: 2, 0, 0 and 0 new pieces). A lost frame that still shows the map now
-  // keeps it (tracker/max_time_lost): 3 rostest runs, 0 new pieces each; at 5x, 8 launch runs:
-  // 2 with new pieces (1 and 2), frames there that show nothing of the map. Since the queue
-  // (FrameQueue) and the look-ahead keyframes: 12 launch runs and 8 rostest runs at 5x without
-  // a new piece, and one run inside a full make test with one (its tracker saw only 83 of 200
-  // pairs). Each loss starts a new piece of odometry, and the keyframe that starts it says so;
-  // more than two, or no odometry at the end, is a failure.
+  // tracker then finds the frame by descriptor. The camera passes close over blurred,
+  // repetitive pallets. Until 2026-11-25 a run in 22 lost the track and started a new piece of
+  // odometry, and 9 launch runs in 12 lost a frame 1.85 s into the bag (map kept): at 5x
+  // the Backend's bundle adjustment of a keyframe arrives some frames later, the frames after it
+  // track against its points unrefined, and OpenCV's EPnP re-fit of its RANSAC consensus landed
+  // pixels off (13 of 218 within 2 px). Since the consensus is re-fitted by reprojection error
+  // (geometry::SolvePnpRansac), 12 launch runs lost no frame. Each loss starts a new piece of
+  // odometry, and the keyframe that starts it says so: none is allowed. Frames lost with the map
+  // kept (the next frame finds the map, odom goes on unbroken) are counted, not asserted.
   const std::size_t losses = fast.new_map_stamps.size();
   RecordProperty("tracking_losses_fast", static_cast<int>(losses));
-  EXPECT_LE(losses, 2u) << fast.log;
+  EXPECT_EQ(losses, 0u) << fast.log;
+  int frames_lost = 0;
+  for (std::size_t at = fast.log.find("tracking lost"); at != std::string::npos;
+       at = fast.log.find("tracking lost", at + 1)) {
+    ++frames_lost;
+  }
+  RecordProperty("tracking_lost_warnings_fast", frames_lost);
   ASSERT_FALSE(fast.odometry.empty());
   EXPECT_GE(fast.odometry.back().timestamp, real_time.odometry.back().timestamp - 0.5)
       << "tracking goes on to the end of the bag";
