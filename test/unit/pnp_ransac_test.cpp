@@ -88,6 +88,44 @@ TEST_P(PnpKernelTest, RecoversAKnownPoseWith30PercentOutliers) {
 INSTANTIATE_TEST_SUITE_P(AllKernels, PnpKernelTest,
                          ::testing::Values("ITERATIVE", "EPNP", "AP3P", "P3P", "SQPNP", "UMEYAMA"));
 
+// A plane (a wall, a stack of pallets seen face on) is where OpenCV's own re-fit of its
+// consensus goes wrong: after AP3P and P3P it re-fits with EPnP, which is ill-conditioned on
+// planar points, and in about half the seeds below its pose kept under 70 % of its consensus
+// within the threshold (191 of 240 once fell to 11). SolvePnpRansac re-fits by reprojection
+// error; every seed must keep nearly all the true inliers.
+TEST(PnpRansac, PlanarSceneKeepsItsConsensus) {
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
+    std::mt19937_64 random(seed);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.7);
+    std::vector<PnpCorrespondence> correspondences;
+    std::vector<bool> is_inlier;
+    for (int i = 0; i < 240; ++i) {
+      // The plane z = 3 + 0.4 x in the camera frame, the camera at the world's origin.
+      const double x = 1.5 * unit(random), y = unit(random);
+      const Eigen::Vector3d point(x, y, 3.0 + 0.4 * x);
+      const Eigen::Vector3d pixels = kCamera.Project(point);
+      PnpCorrespondence c;
+      c.world = point;
+      c.pixel = Eigen::Vector2d(pixels.x() + noise(random), pixels.y() + noise(random));
+      const bool outlier = i % 8 == 0;  // 30 of 240, 40 px off at most
+      if (outlier) c.pixel += 40.0 * Eigen::Vector2d(unit(random), unit(random));
+      correspondences.push_back(c);
+      is_inlier.push_back(!outlier);
+    }
+    geometry::PnpRansacOptions options;
+    options.kernel = PnpKernel::kAp3p;
+    const geometry::PnpResult result =
+        geometry::SolvePnpRansac(correspondences, kCamera, options, Eigen::Isometry3d::Identity());
+    ASSERT_TRUE(result.success) << "seed " << seed;
+    int true_inliers = 0;
+    for (const int i : result.inliers) true_inliers += is_inlier[i] ? 1 : 0;
+    // 0.7 px noise against a 2 px threshold: 99.8 % of the 210 true inliers fall inside at the
+    // true pose; 90 % leaves room for a pose fitted to the noise.
+    EXPECT_GE(true_inliers, 0.9 * 210) << "seed " << seed;
+  }
+}
+
 TEST(PnpRansac, NamesAndTooFewPoints) {
   EXPECT_FALSE(geometry::ParsePnpKernel("DLS"));
   EXPECT_NE(geometry::PnpKernelNames().find("SQPNP"), std::string::npos);
