@@ -5,6 +5,7 @@
 // real frames after the fault are tracked again. The tests share the one tracker the launch
 // starts, in the order written here: each goes on from the stamps and frames the one before
 // left, and time going backwards comes last.
+#include <memory>
 #include <mutex>
 #include <set>
 #include <string>
@@ -99,11 +100,8 @@ class Graph {
 
 class BadInputTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { graph_ = new Graph(); }
-  static void TearDownTestSuite() {
-    delete graph_;
-    graph_ = nullptr;
-  }
+  static void SetUpTestSuite() { graph_ = std::make_unique<Graph>(); }
+  static void TearDownTestSuite() { graph_.reset(); }
 
   BadInputTest() : sequence_(datasets::EurocSequence::Open(EurocSequencePath("V101_micro"))) {}
 
@@ -170,11 +168,11 @@ class BadInputTest : public ::testing::Test {
   static bool HasOdometry(std::int64_t stamp_ns) { return graph_->HasOdometry(stamp_ns); }
 
   static constexpr std::int64_t kStep = 50'000'000;  // 20 Hz
-  static Graph* graph_;
+  static std::unique_ptr<Graph> graph_;
   datasets::EurocSequence sequence_;
 };
 
-Graph* BadInputTest::graph_ = nullptr;
+std::unique_ptr<Graph> BadInputTest::graph_;
 
 TEST_F(BadInputTest, RealFramesAreTracked) {
   graph_->next_stamp = sequence_.frames()[0].timestamp_ns;
