@@ -204,8 +204,9 @@ PnpResult SolvePnpRansac(const std::vector<PnpCorrespondence>& correspondences,
   // OpenCV re-fits its consensus set with EPnP after a 3-point kernel (AP3P, P3P). On a nearly
   // planar, repetitive scene that fit can land pixels away: on MH01's pallets OpenCV's consensus
   // of 218 left 13 within the threshold, and the frame was lost. So the consensus is re-fitted by
-  // reprojection error from there, and the pose that keeps more inliers wins.
-  if (!inliers.empty()) {
+  // reprojection error from there, and the pose that keeps more inliers wins. ITERATIVE's own
+  // re-fit is already that one.
+  if (options.kernel != PnpKernel::kIterative && !inliers.empty()) {
     RefitByReprojection(correspondences, camera, options, std::move(inliers), &result);
   }
   result.success = result.inliers.size() >= 6;
