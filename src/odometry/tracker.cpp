@@ -70,6 +70,7 @@ void Tracker::Reset() {
   velocity_ = Eigen::Isometry3d::Identity();
   velocity_dt_ = 0;
   frames_since_tracked_ = 0;
+  recent_frames_skipped_.fill(0);
 }
 
 std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFeatures& features,
@@ -341,6 +342,8 @@ Eigen::Isometry3d Tracker::Predict(double timestamp) const {
 TrackingResult Tracker::Track(double timestamp, features::StereoFeatures features,
                               int frames_skipped) {
   frames_since_tracked_ += std::max(frames_skipped, 0) + 1;
+  recent_frames_skipped_[next_skip_slot_] = std::max(frames_skipped, 0);
+  next_skip_slot_ = (next_skip_slot_ + 1) % kSkipHistory;
   TrackingResult result;
   const Eigen::Isometry3d predicted = Predict(timestamp);
 
@@ -419,8 +422,8 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   const int settled_points = static_cast<int>(std::count_if(
       inlier_matches.begin(), inlier_matches.end(),
       [this](const Match& m) { return m.point->id < first_point_of_last_keyframe_; }));
-  const KeyframeDecision decision = keyframe_policy_.Decide(
-      KeyframeInput(timestamp, T_world_camera, result, settled_points, frames_skipped));
+  const KeyframeDecision decision =
+      keyframe_policy_.Decide(KeyframeInput(timestamp, T_world_camera, result, settled_points));
   if (decision.insert) {
     result.keyframe =
         MakeKeyframe(timestamp, std::move(features), T_world_camera, inlier_matches, false);
@@ -434,8 +437,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
 
 KeyframePolicyInput Tracker::KeyframeInput(double timestamp,
                                            const Eigen::Isometry3d& T_world_camera,
-                                           const TrackingResult& result, int settled_points,
-                                           int frames_skipped) {
+                                           const TrackingResult& result, int settled_points) {
   KeyframePolicyInput input;
   input.tracked_points = result.inliers;
   input.tracking_weak = result.state == TrackingState::kWeak;
@@ -450,12 +452,14 @@ KeyframePolicyInput Tracker::KeyframeInput(double timestamp,
   input.now.time = timestamp - last_keyframe_time_;
 
   const double gap = timestamp - last_timestamp_;
-  if (frames_skipped > 0 && has_last_ && gap > 0) {
-    // The caller skipped `frames_skipped` frames before this one and will likely skip as many
-    // before the next: the last of those lies that many camera frames ahead, of the
+  const int frames_to_skip =
+      *std::max_element(recent_frames_skipped_.begin(), recent_frames_skipped_.end());
+  if (frames_to_skip > 0 && has_last_ && gap > 0) {
+    // The caller will likely skip `frames_to_skip` frames before the next one
+    // (recent_frames_skipped_): the last of those lies that many camera frames ahead, of the
     // frames_since_tracked_ the gap since the last tracked frame spans (frames lost with the map
     // kept are in the gap too). Motion and the loss of settled points go on as over that gap.
-    const double ahead = static_cast<double>(frames_skipped) / frames_since_tracked_;
+    const double ahead = static_cast<double>(frames_to_skip) / frames_since_tracked_;
     const Eigen::Isometry3d last_step = last_T_world_camera_.inverse() * T_world_camera;
     const Eigen::Isometry3d then = since_keyframe * ScaleMotion(last_step, ahead);
     KeyframeMeasures& measures = input.before_next_frame.emplace();

@@ -42,7 +42,8 @@ constexpr char kUsage[] =
     "--mode localization it is used without being extended: the camera is relocalized in it at\n"
     "start, after every loss and at each keyframe, and trajectory.txt is in the map's frame.\n"
     "--every N processes every Nth stereo pair only, as a tracker that cannot keep up with a\n"
-    "camera (or a bag played N times faster) sees them; default 1.\n"
+    "camera (or a bag played N times faster) sees them; default 1. N may be fractional: 2.5\n"
+    "processes pairs 0, 2, 5, 7, 10, ..., as a tracker at 25 ms a pair sees a bag at 5x.\n"
     "Default configs: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml, " STEREO_FABMAP_SLAM_CONFIG_DIR
     "/fabmap.yaml\n";
 
@@ -50,6 +51,13 @@ double NowMs() {
   return std::chrono::duration<double, std::milli>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
+}
+
+// `every` as summary.json gives it: 4, or 2.5.
+std::string EveryText(double every) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", every);
+  return text;
 }
 
 struct Stats {
@@ -168,8 +176,8 @@ int main(int argc, char** argv) {
     if (args->positional().size() != 1) throw std::invalid_argument("expected one ASL_DIR");
     every = args->NumberOr("every", 1);
     // A million pairs is 14 hours at 20 Hz: beyond any sequence, and a bound the cast can take.
-    if (!(every >= 1 && every <= 1e6) || every != std::floor(every)) {
-      throw std::invalid_argument("--every is a whole number of pairs, 1 to 1000000");
+    if (!(every >= 1 && every <= 1e6)) {
+      throw std::invalid_argument("--every is a number of pairs, 1 to 1000000");
     }
   } catch (const std::invalid_argument& error) {
     std::fprintf(stderr, "run_dataset: %s\n%s", error.what(), kUsage);
@@ -237,11 +245,14 @@ int main(int argc, char** argv) {
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
     std::size_t processed = 0;
-    for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(every)) {
+    // Pair floor(k * every) for k = 0, 1, ...: a fractional `every` skips a varying number of
+    // pairs, as a tracker slower than the camera by a fraction does (FrameQueue).
+    for (std::size_t k = 0, i = 0, previous = 0; i < sequence.size();
+         previous = i, ++k, i = static_cast<std::size_t>(std::floor(k * every + 1e-9))) {
       ++processed;
       const datasets::StereoImages images = sequence.LoadStereoPair(i);
       const double start = NowMs();
-      const int skipped = i == 0 ? 0 : static_cast<int>(every) - 1;
+      const int skipped = i == 0 ? 0 : static_cast<int>(i - previous) - 1;
       const pipeline::FrameRecord& frame =
           slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right, skipped);
       processing_ms += NowMs() - start;
@@ -286,7 +297,7 @@ int main(int argc, char** argv) {
                       [](const pipeline::FrameRecord& f) { return f.is_keyframe; }));
     const std::size_t map_keyframes = slam.map() ? slam.map()->pose_graph().size() : 0;
     std::string json = "{\"sequence\": \"" + name + "\", \"frames\": " + std::to_string(processed) +
-                       ", \"every\": " + std::to_string(static_cast<int>(every)) +
+                       ", \"every\": " + EveryText(every) +
                        ", \"frames_tracked\": " + std::to_string(tracked) +
                        ", \"keyframes\": " + std::to_string(keyframes) + ", \"mode\": \"" +
                        (mode == pipeline::SlamMode::kMapping ? "mapping" : "localization") +

@@ -1,11 +1,12 @@
 // The graph under load and split over processes, on MH01_first10s (200 pairs, 10 s):
 // - playback at 5x, which the tracker cannot keep up with: it skips whole pairs, reports them
-//   once a second, and still makes at least the keyframes of a 1x run and a trajectory close to
-//   it. Until the keyframe policy looked ahead over the pairs the tracker skips
-//   (KeyframePolicyInput::before_next_frame), 5x made 77-87 % of the 1x keyframes and this test
-//   ran at 3x; now six rostest runs made 28-35 keyframes against 26 at 1x, with odometry
-//   for 83-130 of 200 pairs (the rest skipped and reported) and no loss. The graph is kept
-//   after the 5x bag to check that the Backend and LoopDetector dropped no keyframe;
+//   once a second, and still makes the keyframes of a 1x run (to within the phase at the bag's
+//   end, below) and a trajectory close to it. Until the keyframe policy looked ahead over the
+//   pairs the tracker skips (KeyframePolicyInput::before_next_frame), 5x made 77-87 % of the 1x
+//   keyframes and this test ran at 3x; now six rostest runs made 28-35 keyframes against 26 at
+//   1x, with odometry for 83-130 of 200 pairs (the rest skipped and reported) and no loss. The
+//   graph is kept after the 5x bag to check that the Backend and LoopDetector dropped no
+//   keyframe;
 // - every nodelet standalone (its own process, messages serialised) gives the trajectory of
 //   the single manager;
 // - 2x and 10x (a second test): odometry to the end, whole pairs, no keyframe dropped.
@@ -255,8 +256,15 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   // that skipping pairs does not leave the map sparser than at 1x (measured above: 28-35
   // against 26; before the look-ahead, 77-87 % of the 1x keyframes). Since PnP RANSAC re-fits
   // its consensus (03ae42b) the tracker keeps more inliers and takes fewer keyframes for a low
-  // tracked ratio: 27, 28 and 25 against 26 in three fresh-clone runs. Two 1x runs of this bag
-  // already differ by one keyframe, so one fewer is allowed; more would be a sparser map.
+  // tracked ratio: 27, 28 and 25 against 26 in three fresh-clone runs, and 25 in 2 of 10 launch
+  // runs. The look-ahead then guessed the next gap from the last one; since it takes the largest
+  // of the last four (Tracker::recent_frames_skipped_), 23 of 23 runs made 26-41 against 26
+  // (8 of this test, 15 through euroc_bag.launch). When the tracker nearly keeps up (5-12 of 200
+  // pairs skipped), a 5x run is the 1x run with the Backend's updates arriving at other frames;
+  // its keyframes fall within a frame or two of the 1x ones, and whether the last of them comes
+  // before the bag's last pair decides between 26 and 27 (runs at exactly 26 ended at 9.65-9.85 s
+  // of 9.95, where 1x ended at 9.80). That phase at the end is worth one keyframe either way on
+  // a 10 s bag, so one fewer is allowed; more would be a sparser map.
   EXPECT_GE(fast.keyframes + 1, real_time.keyframes);
   RecordProperty("pieces_fast", static_cast<int>(fast.new_map_stamps.size() + 1));
   const double fast_ate = WorstPieceAte(real_time.odometry, fast);

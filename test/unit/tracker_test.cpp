@@ -122,9 +122,10 @@ TEST(Tracker, SkippedFramesDoNotLoseTracking) {
             1e-3);
 }
 
-// The frames at which a tracker that sees every `every`-th frame of a camera sliding sideways
-// 4 cm a frame (20 Hz) takes keyframes, with only the translation bound (0.25 m) on, and why.
-std::vector<std::pair<int, std::string>> TranslationKeyframes(int every) {
+// The frames at which a tracker that sees the `tracked` frames (increasing, from 0) of a camera
+// sliding sideways 4 cm a frame (20 Hz) takes keyframes, with only the translation bound
+// (0.25 m) on, and why.
+std::vector<std::pair<int, std::string>> TranslationKeyframes(const std::vector<int>& tracked) {
   odometry::TrackerOptions options;
   options.parallel = false;
   odometry::KeyframePolicyOptions keyframes;
@@ -136,9 +137,12 @@ std::vector<std::pair<int, std::string>> TranslationKeyframes(int every) {
   StereoWorld world;
   world.Add(RandomPoints(3000, 7, /*half_width=*/24.0), 9);
   std::vector<std::pair<int, std::string>> taken;
-  for (int frame = 0; frame <= 12; frame += every) {
-    const odometry::TrackingResult result = tracker.Track(
-        0.05 * frame, Observe(world, SidewaysAndTurned(0.04 * frame)), frame == 0 ? 0 : every - 1);
+  int previous = 0;
+  for (const int frame : tracked) {
+    const odometry::TrackingResult result =
+        tracker.Track(0.05 * frame, Observe(world, SidewaysAndTurned(0.04 * frame)),
+                      frame == 0 ? 0 : frame - previous - 1);
+    previous = frame;
     EXPECT_EQ(result.state, odometry::TrackingState::kOk) << frame << ": " << result.reason;
     if (result.keyframe && frame > 0) taken.emplace_back(frame, result.reason);
   }
@@ -150,17 +154,33 @@ TEST(Tracker, AKeyframeDueInFramesToBeSkippedIsTakenBeforeThem) {
   // the last tracked before it, and the frames 7-8 the tracker will skip cross it (0.28 m at
   // frame 7): the keyframe is taken at 6, not at 9 (0.36 m). At frame 3 the skipped frames
   // reach 0.20 m only: no keyframe.
-  const std::vector<std::pair<int, std::string>> every_frame = TranslationKeyframes(1);
+  const std::vector<std::pair<int, std::string>> every_frame =
+      TranslationKeyframes({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
   ASSERT_FALSE(every_frame.empty());
   EXPECT_EQ(every_frame[0].first, 7);
   EXPECT_NE(every_frame[0].second.find("keyframe: translation"), std::string::npos)
       << every_frame[0].second;
-  const std::vector<std::pair<int, std::string>> every_third = TranslationKeyframes(3);
+  const std::vector<std::pair<int, std::string>> every_third =
+      TranslationKeyframes({0, 3, 6, 9, 12});
   ASSERT_FALSE(every_third.empty());
   EXPECT_EQ(every_third[0].first, 6);
   EXPECT_NE(every_third[0].second.find("keyframe: translation before the next tracked frame"),
             std::string::npos)
       << every_third[0].second;
+}
+
+TEST(Tracker, AKeyframeIsTakenBeforeALongerGapThanTheLastOne) {
+  // A tracker slower than the camera by a fraction skips a varying number of frames: here two,
+  // none, none, two. At frame 5 (0.20 m) it skipped none, but skipped two shortly before, and
+  // frames 6-7, which it will skip, cross the bound (0.28 m at frame 7): the keyframe is taken
+  // at 5. Guessing from the last gap alone (none) took it at 8 (0.32 m), a gap later than at
+  // every frame (7). At frame 4 the guess reaches frame 6, 0.24 m: no keyframe.
+  const std::vector<std::pair<int, std::string>> taken = TranslationKeyframes({0, 3, 4, 5, 8});
+  ASSERT_FALSE(taken.empty());
+  EXPECT_EQ(taken[0].first, 5) << taken[0].second;
+  EXPECT_NE(taken[0].second.find("keyframe: translation before the next tracked frame"),
+            std::string::npos)
+      << taken[0].second;
 }
 
 TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
