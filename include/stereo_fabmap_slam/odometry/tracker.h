@@ -152,7 +152,7 @@ class Tracker {
   int frames_since_tracked_ = 0;
   // Track's frames_skipped over the last frames; the largest is the guess of how many the caller
   // skips before the next one. A tracker slower than the camera by a fraction skips a varying
-  // number (FrameQueue: one, two or three pairs at 5x, in bursts after a slow frame), so
+  // number (FrameQueue at 5x: none for most pairs, then one or more after a slow frame), so
   // guessing the last count misses the bounds crossed in the longer gaps that follow shorter
   // ones, and takes their keyframes a gap late. Through the graph at 5x (MH01_first10s, ~10 of
   // 200 pairs skipped) that made 25 keyframes against 26 at 1x in 2 of 10 runs; with the largest
