@@ -90,9 +90,10 @@ vocabulary: deps $(WS)/build/Makefile
 # 1.7 GB) are removed after.
 # The sanitizer build compiles at the lowest priority (nice 19) beside the other rostests and
 # the unit tests: those rostests play bags in real time and leave most of a core idle, which the
-# compiler takes (fresh-clone runs on a slow machine: 25.3 min with the build before the tests,
-# 21.5 min beside them; docs/benchmarks.md). The load and restart rostests run first, alone:
-# beside the compiler the tracker took 80 ms a pair instead of 9 and the 5x bag lost the track.
+# compiler takes (fresh-clone runs on a slow machine, apt done: 25.3 min with the build before
+# the tests, 22.6 min beside them; docs/benchmarks.md). The load and restart rostests run first,
+# alone: beside the compiler, even at nice 19, the tracker took 80 ms a pair instead of 9 and the
+# 5x bag lost the track.
 # A failed sanitizer build is a failed test case with the end of its log.
 SANITIZE_LOG := $(REPO)/build/sanitize-build.log
 ROSTESTS := $(sort $(basename $(notdir $(wildcard test/ros/*.test))))
