@@ -103,6 +103,7 @@ test: build
 	$(CMAKE_BUILD) -j$(JOBS) tests
 	rm -rf $(WS)/build/test_results
 	-$(CMAKE_BUILD) -j1 $(call rostest_targets,$(ALONE_ROSTESTS))
+	rm -f $(SANITIZE_LOG).status
 	@echo "Building the sanitizer build at nice 19 beside the tests (log: $(SANITIZE_LOG))"
 	@( nice -n 19 $(MAKE) --no-print-directory sanitize-build > $(SANITIZE_LOG) 2>&1; \
 	   echo $$? > $(SANITIZE_LOG).status ) & \
