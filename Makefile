@@ -111,9 +111,8 @@ test: build
 	  $(CMAKE_BUILD) -j$(JOBS) run_tests_stereo_fabmap_slam_gtest; \
 	  echo "Waiting for the sanitizer build"; wait; true
 	rm -rf $(WS)/build/test_sequences
-	@bash scripts/sanitizer_build_result.sh $(SANITIZE_LOG) $(WS)/build/test_results/sanitizers
 	-bash scripts/sanitizer_tests.sh $(SANITIZE)/devel/lib/stereo_fabmap_slam \
-	  $(WS)/build/test_results/sanitizers
+	  $(WS)/build/test_results/sanitizers $(SANITIZE_LOG)
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
 
 # The sanitizer build: a second build folder, Debug flags with ASan and UBSan, the ROS-free part

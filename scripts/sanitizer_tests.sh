@@ -4,14 +4,45 @@
 # report. Each test leaves RESULTS/sanitize-<test>.xml (JUnit, read by scripts/test_summary.py);
 # a test that a sanitizer stopped, or that crashed before writing its results, gets a file with
 # one failed case quoting the report, so that `make test` fails and says why.
-# usage: sanitizer_tests.sh TEST_BINARY_DIR RESULTS_DIR
+# With BUILD_LOG (`make test` builds the sanitizer build in the background, and BUILD_LOG.status
+# holds its exit status), the build is a case of its own, RESULTS/build-sanitize.xml: failed
+# with the log's first error and the log's end printed, as the programs that happen to exist
+# would otherwise pass alone.
+# usage: sanitizer_tests.sh TEST_BINARY_DIR RESULTS_DIR [BUILD_LOG]
 set -euo pipefail
 binaries=$1
 results=$2
+build_log=${3:-}
 mkdir -p "$results"
-rm -f "$results"/sanitize-*.xml
+rm -f "$results"/sanitize-*.xml "$results"/build-sanitize.xml
 export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+# junit_case XML NAME [FAILURE]: one test case of the class "sanitizer", failed if FAILURE is
+# given (XML's special characters in it become spaces).
+junit_case() {
+  local xml=$1 name=$2 failure=${3:-}
+  local body="<testcase classname=\"sanitizer\" name=\"$name\"/>"
+  if [ -n "$failure" ]; then
+    body="<testcase classname=\"sanitizer\" name=\"$name\"><failure message=\"$(printf '%s' "$failure" | sed 's/[<>&"]/ /g')\"/></testcase>"
+  fi
+  printf '<?xml version="1.0"?>\n<testsuites><testsuite name="sanitizer" tests="1">\n%s\n</testsuite></testsuites>\n' \
+    "$body" > "$xml"
+}
+export -f junit_case
+
+if [ -n "$build_log" ]; then
+  status=$(cat "$build_log.status" 2>/dev/null || echo "unknown")
+  if [ "$status" = 0 ]; then
+    junit_case "$results/build-sanitize.xml" build
+  else
+    echo "The sanitizer build failed (status $status); the end of $build_log:"
+    tail -n 40 "$build_log" || true
+    error=$({ grep -m1 -E "error|Error" "$build_log" || echo "status $status"; } | cut -c1-300)
+    junit_case "$results/build-sanitize.xml" build \
+      "the sanitizer build failed: $error (log: $build_log)"
+  fi
+fi
 
 run_one() {
   local binary=$1 results=$2
@@ -23,12 +54,10 @@ run_one() {
   if [ "$status" -ne 0 ] && grep -qE "^(SUMMARY: [A-Za-z]+Sanitizer|==[0-9]+==ERROR)|runtime error:" "$log"; then
     # The sanitizer's report: its summary line, or the first runtime error.
     local report
-    report=$(grep -m1 -E "^SUMMARY: [A-Za-z]+Sanitizer|runtime error:" "$log" | sed 's/[<>&"]/ /g')
-    printf '<?xml version="1.0"?>\n<testsuites><testsuite name="sanitizer" tests="1">\n<testcase classname="sanitizer" name="%s"><failure message="%s (log: %s)"/></testcase>\n</testsuite></testsuites>\n' \
-      "$name" "$report" "$log" > "$xml"
+    report=$(grep -m1 -E "^SUMMARY: [A-Za-z]+Sanitizer|runtime error:" "$log")
+    junit_case "$xml" "$name" "$report (log: $log)"
   elif [ "$status" -ne 0 ] && [ ! -s "$xml" ]; then
-    printf '<?xml version="1.0"?>\n<testsuites><testsuite name="sanitizer" tests="1">\n<testcase classname="sanitizer" name="%s"><failure message="exited with status %s before writing results (log: %s)"/></testcase>\n</testsuite></testsuites>\n' \
-      "$name" "$status" "$log" > "$xml"
+    junit_case "$xml" "$name" "exited with status $status before writing results (log: $log)"
   fi
   echo "sanitizers: $name exit $status"
 }
