@@ -25,18 +25,20 @@ FabMapModel::FabMapModel(ChowLiuTree tree, double p_z_given_e, double p_z_given_
     for (int z = 0; z < 2; ++z) {
       for (int zp = 0; zp < 2; ++zp) {
         for (int e = 0; e < 2; ++e) {
-          // p(z_q | e_q, z_p) combining the detector model and the tree (Cummins & Newman 2008,
-          // as in OpenCV's former FabMap): alpha / (alpha + beta) with
-          // alpha = p(z) p(z | e) p(z | z_p) and beta the same for not z.
+          // p(z_q | e_q, z_p) combining the detector model and the tree (Cummins & Newman 2008):
+          // with e and z_p independent given z, Bayes gives
+          // p(z | e, z_p) proportional to p(z | e) p(z | z_p) / p(z), so alpha / (alpha + beta)
+          // with alpha = p(not z) p(z | e) p(z | z_p) and beta the same for not z. Where the
+          // parent tells nothing (p(z | z_p) = p(z)) this is the detector model itself.
           const auto detector = [&](bool seen) {
             const double p_seen = e ? p_z_given_e_ : p_z_given_not_e_;
             return seen ? p_seen : 1.0 - p_seen;
           };
           const double marginal = tree_.Marginal(q);
           const double alpha =
-              (z ? marginal : 1 - marginal) * detector(z) * tree_.Conditional(q, z, zp);
+              (z ? 1 - marginal : marginal) * detector(z) * tree_.Conditional(q, z, zp);
           const double beta =
-              (z ? 1 - marginal : marginal) * detector(!z) * tree_.Conditional(q, !z, zp);
+              (z ? marginal : 1 - marginal) * detector(!z) * tree_.Conditional(q, !z, zp);
           z_given_e_zp_[static_cast<std::size_t>(q)][z * 4 + zp * 2 + e] = alpha / (alpha + beta);
         }
       }

@@ -183,7 +183,13 @@ TEST_F(RenderedTwice, ImageFolderWithMatrixFindsEveryRevisit) {
     SCOPED_TRACE(run);
     EXPECT_EQ(Value(summary, run, "queries"), n);  // the second pass
     EXPECT_EQ(Value(summary, run, "queries_with_true_match"), n);
-    EXPECT_GE(Value(summary, run, "recall_at_100_precision"), 0.9);  // as above
+    // As above, except for updated places: the matrix makes a place 5 frames (0.4 m) wide, and
+    // FabMap::Add merges the first pass into wider ones (4 places of 3, 7, 26 and 4 frames), so a
+    // query whose twin lies at a place's end may go to the neighbouring place. One did (twin
+    // frame 12, matched to the place of frames 3-9) and outranks 6 right answers: 0.85. Two more
+    // queries may be lost before the test asks for a look.
+    const bool updated = std::string(run) == "fabmap/update";
+    EXPECT_GE(Value(summary, run, "recall_at_100_precision"), updated ? 0.8 : 0.9);
   }
   // A matrix that does not fit the folder is an error, not a measurement.
   WriteTextFile(temp_->path() + "/small.csv", "1,0\n0,1\n");
@@ -196,9 +202,10 @@ TEST_F(RenderedTwice, ImageFolderWithMatrixFindsEveryRevisit) {
 
 // The figures reported for issue 10 on real data: MH01's first 10 s (200 frames, 83 queries
 // with a true match outside the 5 s window). At 100 % precision FAB-MAP with one place per
-// image (what the SLAM map keeps) recalls 68.7 % (57 queries), with places updated on revisits
-// 94.0 % (78), tf-idf over the same words 56.6 % (47); before the log-odds ranking, the trained
-// detector model and spread corners the first two were 0 % and 16.9 %. The run is
+// image (what the SLAM map keeps) recalls 61.4 % (51 queries), with places updated on revisits
+// 92.8 % (77), tf-idf over the same words 56.6 % (47); before the log-odds ranking, the trained
+// detector model and spread corners the first two were 0 % and 16.9 % (68.7 and 94.0 % with the
+// observation model's marginal on the wrong side, before 2026-11-25). The run is
 // deterministic, so the margin is for deliberate changes to features or FAB-MAP, not noise:
 // 5 queries (6 %) may be lost before the test asks for a look; fewer would flag every small
 // reordering of the top answers, which decides this statistic. FAB-MAP must stay at least as
@@ -217,8 +224,8 @@ TEST(EvaluatePlaceRecognitionTool, Mh01RecallAtFullPrecision) {
   EXPECT_GT(Value(summary, "fabmap/update", "queries_with_true_match"), 50);
   EXPECT_GT(Value(summary, "fabmap/update", "excluded_pairs"), 0);
   const double per_image = Value(summary, "fabmap/per-image", "recall_at_100_precision");
-  EXPECT_GE(per_image, 0.687 - 0.06);
-  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"), 0.940 - 0.06);
+  EXPECT_GE(per_image, 0.614 - 0.06);
+  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"), 0.928 - 0.06);
   EXPECT_GE(per_image, Value(summary, "tfidf/per-image", "recall_at_100_precision"));
   EXPECT_EQ(Value(summary, "fabmap/update", "precision_at_default"), 1.0);
 }
@@ -226,7 +233,7 @@ TEST(EvaluatePlaceRecognitionTool, Mh01RecallAtFullPrecision) {
 // Perceptual aliasing: the rendered hall hangs the same photographs on several walls, and the
 // figure eight (40 s, seed 2: 455 queries with a true match) sees them from places 5-11 m
 // apart. With places updated on revisits, no match FAB-MAP declares at the default threshold
-// (fabmap.match_log_odds) may be false; it declared 89, recall 19.6 %, and may lose 6 % of the
+// (fabmap.match_log_odds) may be false; it declared 115, recall 25.3 %, and may lose 6 % of the
 // queries with a true match, as above, before the test asks for a look.
 TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefaultThreshold) {
   TemporaryDirectory temp;
@@ -245,7 +252,7 @@ TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefau
   RecordProperty("summary", ReadTextFile(temp.path() + "/place_recognition_summary.csv"));
   EXPECT_GT(Value(summary, "fabmap/update", "queries_with_true_match"), 400);
   EXPECT_EQ(Value(summary, "fabmap/update", "precision_at_default"), 1.0);
-  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_default"), 0.196 - 0.06);
+  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_default"), 0.253 - 0.06);
   EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"),
             Value(summary, "tfidf/per-image", "recall_at_100_precision"));
 }

@@ -109,9 +109,11 @@ double HandLogLikelihood(const ChowLiuTree& tree, const FabMapOptions& o,
         return seen ? (e ? o.p_z_given_e : o.p_z_given_not_e)
                     : 1 - (e ? o.p_z_given_e : o.p_z_given_not_e);
       };
-      const double alpha = (z ? marginal : 1 - marginal) * detect(z) * tree.Conditional(q, z, zp);
-      const double beta = (z ? 1 - marginal : marginal) * detect(!z) * tree.Conditional(q, !z, zp);
-      p += alpha / (alpha + beta) * (e ? theta[q] : 1 - theta[q]);
+      // Cummins & Newman 2008: p(z | e, z_p) = beta / (alpha + beta), with
+      // beta = p(not z) p(z | e) p(z | z_p) and alpha = p(z) p(not z | e) p(not z | z_p).
+      const double beta = (z ? 1 - marginal : marginal) * detect(z) * tree.Conditional(q, z, zp);
+      const double alpha = (z ? marginal : 1 - marginal) * detect(!z) * tree.Conditional(q, !z, zp);
+      p += beta / (alpha + beta) * (e ? theta[q] : 1 - theta[q]);
     }
     log_likelihood += std::log(p);
   }
@@ -130,6 +132,31 @@ std::vector<double> HandTheta(const ChowLiuTree& tree, const FabMapOptions& o,
     theta.push_back(present / (present + absent));
   }
   return theta;
+}
+
+// Where the tree tells nothing about a word (the root: p(z | z_p) = p(z)), the observation model
+// is the detector model itself, whatever the word's marginal; a child whose parent is shown
+// becomes likelier to be seen, one whose parent is not, less. (Multiplying by p(z) instead of
+// dividing by it, as this model once did, gives this root (marginal above 0.5) p(z = 1 | e) 0.55
+// instead of 0.39; a real word, marginal a few per cent, was then almost never expected where
+// it exists, so its absence was no evidence against a place.)
+TEST(FabMapModel, ObservationModelIsTheDetectorWhereTheTreeTellsNothing) {
+  const ChowLiuTree tree = ToyTree();
+  const FabMapModel model(tree, 0.39, 0.01);
+  const int root = tree.root();
+  ASSERT_GT(tree.Marginal(root), 0.05);
+  ASSERT_LT(tree.Marginal(root), 0.95);
+  for (const bool zp : {false, true}) {
+    EXPECT_NEAR(std::exp(model.Term(root, true, zp, 1.0)), 0.39, 1e-12);
+    EXPECT_NEAR(std::exp(model.Term(root, false, zp, 1.0)), 0.61, 1e-12);
+    EXPECT_NEAR(std::exp(model.Term(root, true, zp, 0.0)), 0.01, 1e-12);
+    EXPECT_NEAR(std::exp(model.Term(root, false, zp, 0.0)), 0.99, 1e-12);
+  }
+  for (int w = 0; w < tree.size(); ++w) {
+    if (w == root || tree.Conditional(w, true, true) <= tree.Conditional(w, true, false)) continue;
+    EXPECT_GT(std::exp(model.Term(w, true, true, 1.0)), 0.39) << w;
+    EXPECT_LT(std::exp(model.Term(w, true, false, 1.0)), 0.39) << w;
+  }
 }
 
 class ToyFabMap : public ::testing::TestWithParam<std::tuple<NewPlaceModel, bool>> {};
