@@ -6,8 +6,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 
 namespace stereo_fabmap_slam::datasets {
 
@@ -120,7 +120,7 @@ EurocSequence EurocSequence::Open(const std::string& directory,
 
   const std::string ground_truth_path = sequence.mav0_ + "/state_groundtruth_estimate0/data.csv";
   if (IsFile(ground_truth_path)) {
-    sequence.ground_truth_ = evaluation::ReadEurocTrajectory(ground_truth_path);
+    sequence.ground_truth_ = io::ReadEurocTrajectory(ground_truth_path);
   }
   return sequence;
 }

@@ -10,7 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "stereo_fabmap_slam/datasets/camera_renderer.h"
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 
 namespace stereo_fabmap_slam::datasets {
 namespace {
@@ -144,12 +144,12 @@ void SyntheticSequence::Write(const std::string& directory,
 
   // Ground truth at 200 Hz over the same time span.
   std::filesystem::create_directories(mav0 + "/state_groundtruth_estimate0");
-  evaluation::Trajectory truth;
+  io::Trajectory truth;
   for (std::int64_t k = 0; k * 5'000'000 <= (frames - 1) * kFrameNs; ++k) {
     const double t = k * 0.005;
     truth.push_back({(kStartNs + k * 5'000'000) * 1e-9, route_.BodyPose(t)});
   }
-  evaluation::WriteEurocTrajectory(truth, mav0 + "/state_groundtruth_estimate0/data.csv");
+  io::WriteEurocTrajectory(truth, mav0 + "/state_groundtruth_estimate0/data.csv");
 
   // The same rig in the nodelets' calibration format (launch files: calibration:=...).
   camera::WriteStereoCalibrationYaml(rig, directory + "/stereo_calibration.yaml");

@@ -131,7 +131,7 @@ PoseError ComparePoses(const Eigen::Isometry3d& estimated_T_camera_reference,
   return error;
 }
 
-odometry::PointMatches MatchToReference(const features::StereoFeatures& reference,
+geometry::PointMatches MatchToReference(const features::StereoFeatures& reference,
                                         const features::StereoFeatures& test, int descriptor_norm,
                                         double max_descriptor_distance, double match_ratio) {
   std::vector<Eigen::Vector3d> points;
@@ -149,13 +149,13 @@ odometry::PointMatches MatchToReference(const features::StereoFeatures& referenc
       reference.descriptors.row(rows[k]).copyTo(descriptors.row(static_cast<int>(k)));
     }
   }
-  return odometry::MatchedPoints(
-      test, points,
+  return geometry::MatchedPoints(
+      test.keypoints, test.u_right, test.points, points,
       features::RatioTestMatches(test.descriptors, descriptors, descriptor_norm,
                                  max_descriptor_distance, match_ratio));
 }
 
-std::vector<PnpTrial> RunPnpKernels(const odometry::PointMatches& matches,
+std::vector<PnpTrial> RunPnpKernels(const geometry::PointMatches& matches,
                                     const geometry::StereoCamera& camera,
                                     const Eigen::Isometry3d& true_T_camera_reference,
                                     const std::vector<geometry::PnpKernel>& kernels,
@@ -195,7 +195,7 @@ std::vector<PnpTrial> RunPnpKernels(const odometry::PointMatches& matches,
       std::vector<bool> initial(matches.observations.size(), false);
       for (const int i : estimate.inliers) initial[static_cast<std::size_t>(i)] = true;
       const double refine_start = clock();
-      const odometry::PoseRefinement pose = odometry::RefinePose(
+      const geometry::PoseRefinement pose = geometry::RefinePose(
           matches.observations, camera, estimate.T_camera_world, options.refinement, &initial);
       refined.time_ms += clock() - refine_start;
       refined.inliers = pose.inliers;

@@ -4,19 +4,6 @@
 
 namespace stereo_fabmap_slam::odometry {
 
-void PoseRefinementOptions::Visit(io::OptionVisitor& visitor) {
-  visitor.Visit("sigma", &sigma);
-  visitor.Visit("rounds", &rounds);
-  visitor.Visit("iterations", &iterations);
-}
-
-void PoseRefinementOptions::Validate() const {
-  if (!(sigma > 0)) throw std::invalid_argument("pose refinement sigma must be > 0");
-  if (rounds < 1 || iterations < 1) {
-    throw std::invalid_argument("pose refinement rounds and iterations must be >= 1");
-  }
-}
-
 void KeyframePolicyOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_tracked_ratio", &min_tracked_ratio);
   visitor.Visit("min_tracked_points", &min_tracked_points);

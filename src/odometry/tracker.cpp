@@ -186,9 +186,9 @@ geometry::PnpResult Tracker::SolvePose(const features::StereoFeatures& features,
   return geometry::SolvePnpRansac(correspondences, camera_, ransac_options, guess);
 }
 
-std::vector<PoseObservation> Tracker::Observations(const features::StereoFeatures& features,
-                                                   const std::vector<Match>& matches) const {
-  std::vector<PoseObservation> observations;
+std::vector<geometry::PoseObservation> Tracker::Observations(
+    const features::StereoFeatures& features, const std::vector<Match>& matches) const {
+  std::vector<geometry::PoseObservation> observations;
   observations.reserve(matches.size());
   for (const Match& m : matches) {
     const cv::Point2f& p = features.keypoints[m.keypoint].pt;
@@ -391,9 +391,9 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   // Umeyama kernel): good enough to search again with a fine radius, which finds the points
   // the coarse search missed, before the robust refinement.
   matches = SearchByProjection(features, ransac.T_camera_world, options_.search_radius_fine);
-  std::vector<PoseObservation> observations = Observations(features, matches);
-  const PoseRefinement refined =
-      RefinePose(observations, camera_, ransac.T_camera_world, options_.refinement);
+  std::vector<geometry::PoseObservation> observations = Observations(features, matches);
+  const geometry::PoseRefinement refined =
+      geometry::RefinePose(observations, camera_, ransac.T_camera_world, options_.refinement);
   std::vector<Match> inlier_matches;
   std::vector<int> matched_keypoints;
   for (std::size_t k = 0; k < matches.size(); ++k) {

@@ -173,9 +173,9 @@ RelocalizationOutput StereoSlam::Relocalize(const cv::Mat& left_raw,
   return relocalized;
 }
 
-evaluation::Trajectory StereoSlam::OdometryTrajectory() const {
+io::Trajectory StereoSlam::OdometryTrajectory() const {
   const std::map<std::int64_t, Eigen::Isometry3d> keyframes = backend_.KeyframePoses();
-  evaluation::Trajectory trajectory;
+  io::Trajectory trajectory;
   for (const FrameRecord& frame : frames_) {
     // A lost frame without a keyframe to refer to has no pose, only the motion model's guess.
     if (frame.state == odometry::TrackingState::kLost && frame.reference_keyframe < 0) continue;
@@ -195,10 +195,10 @@ void StereoSlam::EnableLoopClosing(place_recognition::LoopDetector detector,
                           front_end_.max_match_distance(), clock_);
 }
 
-evaluation::Trajectory StereoSlam::MapTrajectory() const {
+io::Trajectory StereoSlam::MapTrajectory() const {
   if (!loop_closing_) return OdometryTrajectory();
   const backend::PoseGraph& graph = loop_closing_->pose_graph();
-  evaluation::Trajectory trajectory;
+  io::Trajectory trajectory;
   for (const FrameRecord& frame : frames_) {
     if (frame.T_map_camera) {
       trajectory.push_back({frame.timestamp, *frame.T_map_camera});  // localization mode
@@ -211,8 +211,8 @@ evaluation::Trajectory StereoSlam::MapTrajectory() const {
   return trajectory;
 }
 
-evaluation::Trajectory StereoSlam::KeyframeTrajectory() const {
-  evaluation::Trajectory trajectory;
+io::Trajectory StereoSlam::KeyframeTrajectory() const {
+  io::Trajectory trajectory;
   const std::map<std::int64_t, Eigen::Isometry3d> poses =
       loop_closing_ ? loop_closing_->pose_graph().MapPoses() : backend_.KeyframePoses();
   for (const auto& [id, pose] : poses) {

@@ -6,18 +6,13 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "stereo_fabmap_slam/features/descriptor_matching.h"
-#include "stereo_fabmap_slam/geometry/image_coverage.h"
-#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
-#include "stereo_fabmap_slam/odometry/pose_refiner.h"
 #include "stereo_fabmap_slam/place_recognition/place_database.h"
 
 namespace stereo_fabmap_slam::place_recognition {
 namespace {
 
 constexpr double kDegreesToRadians = M_PI / 180.0;
-constexpr int kSpreadGrid = 4;  // inlier spread is counted in kSpreadGrid x kSpreadGrid cells
 
 double RotationDegrees(const Eigen::Matrix3d& rotation) {
   return Eigen::AngleAxisd(rotation).angle() / kDegreesToRadians;
@@ -31,9 +26,7 @@ LoopDetector::LoopDetector(const LoopDetectorOptions& options, Vocabulary vocabu
     : options_((options.Validate(), options)),
       vocabulary_(std::move(vocabulary)),
       fabmap_(std::move(fabmap)),
-      camera_(camera),
-      descriptor_norm_(descriptor_norm),
-      max_descriptor_distance_(max_descriptor_distance),
+      verifier_(camera, descriptor_norm, max_descriptor_distance),
       vocabulary_fingerprint_(vocabulary_.Fingerprint()) {
   if (fabmap_.model().size() != vocabulary_.size()) {
     throw std::invalid_argument("the Chow-Liu tree has " + std::to_string(fabmap_.model().size()) +
@@ -86,8 +79,8 @@ const map::StoredKeyframe& LoopDetector::Add(map::Keyframe keyframe, std::vector
 LoopDetector LoopDetector::WithoutKeyframes() const {
   FabMap fabmap = fabmap_;
   fabmap.SetPlaces(PlaceDatabase(vocabulary_.size()));
-  return LoopDetector(options_, vocabulary_, std::move(fabmap), camera_, descriptor_norm_,
-                      max_descriptor_distance_);
+  return LoopDetector(options_, vocabulary_, std::move(fabmap), verifier_.camera(),
+                      verifier_.descriptor_norm(), verifier_.max_descriptor_distance());
 }
 
 LoopDetection LoopDetector::Process(map::Keyframe keyframe, bool add_to_map) {
@@ -176,17 +169,12 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   LoopCandidate result;
   result.keyframe_id = candidate.keyframe.id;
   result.verified = true;
-  const features::StereoFeatures& q = query.keyframe.features;
   const features::StereoFeatures& c = candidate.keyframe.features;
 
   // The candidate's stereo points, matched by descriptor with the ratio test.
   std::vector<int> candidate_rows;
   for (std::size_t i = 0; i < c.size(); ++i) {
     if (c.HasDepth(i)) candidate_rows.push_back(static_cast<int>(i));
-  }
-  if (candidate_rows.size() < 6 || q.size() < 6) {
-    result.reason = "too few key points";
-    return result;
   }
   cv::Mat candidate_descriptors(static_cast<int>(candidate_rows.size()), c.descriptors.cols,
                                 c.descriptors.type());
@@ -195,53 +183,24 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
     c.descriptors.row(candidate_rows[k]).copyTo(candidate_descriptors.row(static_cast<int>(k)));
     candidate_points.push_back(c.points[static_cast<std::size_t>(candidate_rows[k])]);
   }
-  const odometry::PointMatches matched = odometry::MatchedPoints(
-      q, candidate_points,
-      features::RatioTestMatches(q.descriptors, candidate_descriptors, descriptor_norm_,
-                                 max_descriptor_distance_, options_.match_ratio));
-  const std::vector<geometry::PnpCorrespondence>& correspondences = matched.correspondences;
-  const std::vector<odometry::PoseObservation>& observations = matched.observations;
-  result.matches = static_cast<int>(correspondences.size());
-  if (result.matches < options_.min_inliers) {
-    result.reason = "only " + std::to_string(result.matches) + " descriptor matches";
-    return result;
-  }
-
-  geometry::PnpRansacOptions ransac_options;
-  ransac_options.kernel = options_.pnp_kernel;
-  ransac_options.reprojection_threshold = options_.ransac_threshold;
-  ransac_options.max_iterations = options_.ransac_iterations;
-  const geometry::PnpResult ransac = geometry::SolvePnpRansac(
-      correspondences, camera_, ransac_options, Eigen::Isometry3d::Identity());
-  if (!ransac.success || static_cast<int>(ransac.inliers.size()) < options_.min_inliers) {
-    result.inliers = static_cast<int>(ransac.inliers.size());
-    result.reason = "RANSAC found " + std::to_string(ransac.inliers.size()) + " inliers";
-    return result;
-  }
-  std::vector<bool> initial(correspondences.size(), false);
-  for (const int i : ransac.inliers) initial[static_cast<std::size_t>(i)] = true;
-  const odometry::PoseRefinement refined = odometry::RefinePose(
-      observations, camera_, ransac.T_camera_world, odometry::PoseRefinementOptions(), &initial);
-  result.inliers = refined.inliers;
-  if (refined.inliers < options_.min_inliers) {
-    result.reason = "refinement kept " + std::to_string(refined.inliers) + " inliers";
-    return result;
-  }
-
-  // Spread: a loop seen through one small object is no loop.
-  std::vector<Eigen::Vector2d> inlier_pixels;
-  for (std::size_t k = 0; k < observations.size(); ++k) {
-    if (refined.inlier[k]) inlier_pixels.emplace_back(observations[k].u, observations[k].v);
-  }
-  const int occupied = geometry::OccupiedCells(inlier_pixels, camera_.size, kSpreadGrid);
-  if (occupied < options_.min_inlier_cells) {
-    result.reason = "inliers cover only " + std::to_string(occupied) + " of " +
-                    std::to_string(kSpreadGrid * kSpreadGrid) + " image cells";
+  VerificationThresholds thresholds;
+  thresholds.match_ratio = options_.match_ratio;
+  thresholds.pnp_kernel = options_.pnp_kernel;
+  thresholds.ransac_threshold = options_.ransac_threshold;
+  thresholds.ransac_iterations = options_.ransac_iterations;
+  thresholds.min_inliers = options_.min_inliers;
+  thresholds.min_inlier_cells = options_.min_inlier_cells;
+  const ViewVerification verified = verifier_.Verify(query.keyframe.features, candidate_points,
+                                                     candidate_descriptors, thresholds);
+  result.matches = verified.matches;
+  result.inliers = verified.inliers;
+  if (!verified.passed()) {
+    result.reason = verified.reason;
     return result;
   }
 
   // T_candidate_query: the query camera in the candidate camera's frame.
-  const Eigen::Isometry3d T_candidate_query = refined.T_camera_world.inverse();
+  const Eigen::Isometry3d T_candidate_query = verified.refined.T_camera_world.inverse();
   if (T_candidate_query.translation().norm() > options_.max_loop_distance) {
     char text[96];
     std::snprintf(text, sizeof(text), "cameras %.2f m apart (more than %.2f m)",
@@ -274,7 +233,7 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   result.edge.query_id = query.keyframe.id;
   result.edge.match_id = candidate.keyframe.id;
   result.edge.T_match_query = T_candidate_query;
-  result.edge.inliers = refined.inliers;
+  result.edge.inliers = verified.inliers;
   result.edge.information =
       geometry::DiagonalPoseInformation(options_.translation_sigma, options_.rotation_sigma_deg);
   return result;

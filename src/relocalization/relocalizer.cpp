@@ -6,17 +6,13 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "stereo_fabmap_slam/features/descriptor_matching.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/keypoint_grid.h"
-#include "stereo_fabmap_slam/geometry/image_coverage.h"
-#include "stereo_fabmap_slam/geometry/pnp_ransac.h"
-#include "stereo_fabmap_slam/odometry/pose_refiner.h"
+#include "stereo_fabmap_slam/geometry/pose_refiner.h"
 
 namespace stereo_fabmap_slam::relocalization {
 namespace {
 
-constexpr int kSpreadGrid = 4;   // inlier spread is counted in kSpreadGrid x kSpreadGrid cells
 constexpr int kSearchCell = 16;  // [px] cells of the key point grid for the guided search
 
 // Order of the stages: a failure reports the candidate that got furthest.
@@ -67,7 +63,8 @@ Relocalizer::Relocalizer(const RelocalizerOptions& options, const geometry::Ster
     : options_((options.Validate(), options)),
       camera_(camera),
       descriptor_norm_(descriptor_norm),
-      max_descriptor_distance_(max_descriptor_distance) {}
+      max_descriptor_distance_(max_descriptor_distance),
+      verifier_(camera, descriptor_norm, max_descriptor_distance) {}
 
 Relocalization Relocalizer::Relocalize(const features::StereoFeatures& frame,
                                        const std::vector<int>& words,
@@ -154,46 +151,35 @@ Relocalizer::PointSet Relocalizer::GatherPoints(const map::KeyframeDatabase& dat
 Relocalization Relocalizer::Verify(const features::StereoFeatures& frame,
                                    const PointSet& set) const {
   Relocalization result;
-  // 1. Descriptor matches between the frame and the candidate's own points, with the ratio test.
-  const odometry::PointMatches matched = odometry::MatchedPoints(
-      frame, set.points,
-      features::RatioTestMatches(frame.descriptors,
-                                 set.descriptors.rowRange(0, set.candidate_points),
-                                 descriptor_norm_, max_descriptor_distance_, options_.match_ratio));
-  const std::vector<geometry::PnpCorrespondence>& correspondences = matched.correspondences;
-  const std::vector<odometry::PoseObservation>& observations = matched.observations;
-  result.matches = static_cast<int>(correspondences.size());
-  if (result.matches < options_.min_ransac_inliers) {
-    result.status = RelocalizationStatus::kTooFewMatches;
-    result.reason = "only " + std::to_string(result.matches) + " descriptor matches";
-    return result;
+  // 1-2. Descriptor matches between the frame and the candidate's own points (the first
+  // candidate_points of the set), PnP RANSAC, and the robust refinement of its consensus.
+  place_recognition::VerificationThresholds thresholds;
+  thresholds.match_ratio = options_.match_ratio;
+  thresholds.pnp_kernel = options_.pnp_kernel;
+  thresholds.ransac_threshold = options_.ransac_threshold;
+  thresholds.ransac_iterations = options_.ransac_iterations;
+  thresholds.min_inliers = options_.min_ransac_inliers;
+  const place_recognition::ViewVerification verified = verifier_.Verify(
+      frame, set.points, set.descriptors.rowRange(0, set.candidate_points), thresholds);
+  result.matches = verified.matches;
+  result.inliers = verified.inliers;
+  result.reason = verified.reason;
+  switch (verified.stage) {
+    case place_recognition::VerificationStage::kTooFewMatches:
+      result.status = RelocalizationStatus::kTooFewMatches;
+      return result;
+    case place_recognition::VerificationStage::kRansacFailed:
+      result.status = RelocalizationStatus::kRansacFailed;
+      return result;
+    case place_recognition::VerificationStage::kRefinementFailed:
+    case place_recognition::VerificationStage::kTooLittleSpread:
+      result.status = RelocalizationStatus::kVerificationFailed;
+      return result;
+    case place_recognition::VerificationStage::kPassed:
+      break;
   }
-
-  // 2. PnP RANSAC with the configured kernel, then the robust refinement of its consensus.
-  geometry::PnpRansacOptions ransac_options;
-  ransac_options.kernel = options_.pnp_kernel;
-  ransac_options.reprojection_threshold = options_.ransac_threshold;
-  ransac_options.max_iterations = options_.ransac_iterations;
-  const geometry::PnpResult ransac = geometry::SolvePnpRansac(
-      correspondences, camera_, ransac_options, Eigen::Isometry3d::Identity());
-  result.inliers = static_cast<int>(ransac.inliers.size());
-  if (!ransac.success || result.inliers < options_.min_ransac_inliers) {
-    result.status = RelocalizationStatus::kRansacFailed;
-    result.reason = "RANSAC found " + std::to_string(result.inliers) + " inliers of " +
-                    std::to_string(result.matches) + " matches";
-    return result;
-  }
-  std::vector<bool> initial(correspondences.size(), false);
-  for (const int i : ransac.inliers) initial[static_cast<std::size_t>(i)] = true;
-  const odometry::PoseRefinementOptions refinement;
-  const odometry::PoseRefinement refined =
-      odometry::RefinePose(observations, camera_, ransac.T_camera_world, refinement, &initial);
-  result.inliers = refined.inliers;
-  if (refined.inliers < options_.min_ransac_inliers) {
-    result.status = RelocalizationStatus::kVerificationFailed;
-    result.reason = "refinement kept " + std::to_string(refined.inliers) + " inliers";
-    return result;
-  }
+  const geometry::PoseRefinement& refined = verified.refined;
+  const geometry::PoseRefinementOptions refinement;
 
   // 3. Guided search: each point, projected with the refined pose, takes its best key point
   // nearby; each key point keeps its best point.
@@ -231,22 +217,18 @@ Relocalization Relocalizer::Verify(const features::StereoFeatures& frame,
   std::vector<int> keypoints;
   for (const auto& entry : by_keypoint) keypoints.push_back(entry.first);
   std::sort(keypoints.begin(), keypoints.end());  // deterministic order for the refinement
-  std::vector<odometry::PoseObservation> guided;
+  std::vector<geometry::PoseObservation> guided;
   for (const int i : keypoints) {
     const cv::Point2f& pixel = frame.keypoints[static_cast<std::size_t>(i)].pt;
     guided.push_back({set.points[by_keypoint.at(i).point], pixel.x, pixel.y,
                       frame.u_right[static_cast<std::size_t>(i)]});
   }
-  const odometry::PoseRefinement final_pose =
-      odometry::RefinePose(guided, camera_, refined.T_camera_world, refinement);
+  const geometry::PoseRefinement final_pose =
+      geometry::RefinePose(guided, camera_, refined.T_camera_world, refinement);
 
   // 4. Acceptance: enough inliers, spread over the image.
   result.inliers = final_pose.inliers;
-  std::vector<Eigen::Vector2d> inlier_pixels;
-  for (std::size_t k = 0; k < guided.size(); ++k) {
-    if (final_pose.inlier[k]) inlier_pixels.emplace_back(guided[k].u, guided[k].v);
-  }
-  result.inlier_cells = geometry::OccupiedCells(inlier_pixels, camera_.size, kSpreadGrid);
+  result.inlier_cells = place_recognition::InlierCells(guided, final_pose.inlier, camera_.size);
   result.T_keyframe_camera = final_pose.T_camera_world.inverse();
   if (result.inliers < options_.min_inliers) {
     result.status = RelocalizationStatus::kVerificationFailed;
@@ -256,8 +238,10 @@ Relocalization Relocalizer::Verify(const features::StereoFeatures& frame,
   }
   if (result.inlier_cells < options_.min_inlier_cells) {
     result.status = RelocalizationStatus::kVerificationFailed;
-    result.reason = "inliers cover only " + std::to_string(result.inlier_cells) + " of " +
-                    std::to_string(kSpreadGrid * kSpreadGrid) + " image cells";
+    result.reason =
+        "inliers cover only " + std::to_string(result.inlier_cells) + " of " +
+        std::to_string(place_recognition::kSpreadGrid * place_recognition::kSpreadGrid) +
+        " image cells";
     return result;
   }
   result.status = RelocalizationStatus::kSuccess;

@@ -9,7 +9,7 @@
 namespace stereo_fabmap_slam::ros_conversions {
 namespace {
 
-void WriteGroundTruth(const evaluation::StampedPose& body, rosbag::Bag* bag) {
+void WriteGroundTruth(const io::StampedPose& body, rosbag::Bag* bag) {
   geometry_msgs::PoseStamped message;
   message.header.stamp.fromSec(body.timestamp);
   message.header.frame_id = "world";
@@ -21,7 +21,7 @@ void WriteGroundTruth(const evaluation::StampedPose& body, rosbag::Bag* bag) {
 
 void WriteEurocBag(const datasets::EurocSequence& sequence, const std::string& bag_path) {
   rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
-  const evaluation::Trajectory& truth = sequence.ground_truth();
+  const io::Trajectory& truth = sequence.ground_truth();
   std::size_t next_truth = 0;
   // camera_info with the rectification of the sequence's calibration (default options), so
   // that use_camera_info works on the bag as on a driver's output.

@@ -139,7 +139,7 @@ std::vector<evaluation::PnpTrial> StudySequence(const std::string& directory,
   std::vector<evaluation::PnpTrial> trials;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const Pair& pair = pairs[p];
-    const odometry::PointMatches matches = evaluation::MatchToReference(
+    const geometry::PointMatches matches = evaluation::MatchToReference(
         features.at(pair.reference), features.at(pair.test), extractor.descriptor_norm(),
         extractor.max_match_distance(), study.match_ratio);
     const Eigen::Isometry3d true_T_test_reference =

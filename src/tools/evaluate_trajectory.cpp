@@ -10,10 +10,10 @@
 
 #include "command_line.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_plot.h"
 #include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 
 namespace {
 
@@ -41,8 +41,8 @@ constexpr char kUsage[] =
 
 // Reads a trajectory and tells on stderr what in it another tool may have meant differently.
 evaluation::Trajectory ReadWithWarnings(const std::string& path) {
-  evaluation::TrajectoryFileNotes notes;
-  evaluation::Trajectory trajectory = evaluation::ReadTrajectory(path, &notes);
+  io::TrajectoryFileNotes notes;
+  evaluation::Trajectory trajectory = io::ReadTrajectory(path, &notes);
   if (notes.header_skipped) {
     std::fprintf(stderr, "evaluate_trajectory: %s: first row taken as a header\n", path.c_str());
   }
@@ -220,7 +220,7 @@ int main(int argc, char** argv) {
     }
     if (const auto poses_path = args->Value("poses")) {
       // Each pose against the ground truth nearest in time, after the estimate's alignment.
-      for (const auto& pose : evaluation::ReadTrajectory(*poses_path)) {
+      for (const auto& pose : io::ReadTrajectory(*poses_path)) {
         const auto nearest = std::min_element(ground_truth.begin(), ground_truth.end(),
                                               [&](const auto& a, const auto& b) {
                                                 return std::abs(a.timestamp - pose.timestamp) <
@@ -244,8 +244,7 @@ int main(int argc, char** argv) {
       const auto loops_path = args->Value("loops");
       const auto relocalizations_path = args->Value("relocalizations");
       WritePlot(
-          result,
-          keyframes_path ? evaluation::ReadTrajectory(*keyframes_path) : evaluation::Trajectory{},
+          result, keyframes_path ? io::ReadTrajectory(*keyframes_path) : evaluation::Trajectory{},
           estimate, loops_path ? ReadTimePairs(*loops_path) : TimePairs{},
           relocalizations_path ? ReadTimePairs(*relocalizations_path) : TimePairs{}, *plot_path);
     }

@@ -18,8 +18,8 @@
 #include "command_line.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 
 namespace {
@@ -268,10 +268,10 @@ int main(int argc, char** argv) {
 
     const evaluation::Trajectory trajectory = slam.MapTrajectory();
     const evaluation::Trajectory odometry_trajectory = slam.OdometryTrajectory();
-    evaluation::WriteTumTrajectory(trajectory, output + "/trajectory.txt");
-    evaluation::WriteTumTrajectory(odometry_trajectory, output + "/odometry.txt");
+    io::WriteTumTrajectory(trajectory, output + "/trajectory.txt");
+    io::WriteTumTrajectory(odometry_trajectory, output + "/odometry.txt");
     const LoopCounts loops = WriteLoops(slam, output + "/loops.csv");
-    evaluation::WriteTumTrajectory(slam.KeyframeTrajectory(), output + "/keyframes.txt");
+    io::WriteTumTrajectory(slam.KeyframeTrajectory(), output + "/keyframes.txt");
     WriteTiming(slam.frames(), output + "/timing.csv");
 
     std::vector<double> stage[7];

@@ -21,7 +21,7 @@
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -40,12 +40,12 @@ class EurocOdometry : public ::testing::Test {
                          &output),
               0)
         << output;
-    offline_ = evaluation::ReadTumTrajectory(temp_.path() + "/offline/odometry.txt");
+    offline_ = io::ReadTumTrajectory(temp_.path() + "/offline/odometry.txt");
   }
 
   // The offline runner's camera pose (in its first camera pose) at an image stamp.
   Eigen::Isometry3d OfflinePose(std::int64_t stamp_ns) const {
-    for (const evaluation::StampedPose& p : offline_) {
+    for (const io::StampedPose& p : offline_) {
       if (std::llabs(static_cast<std::int64_t>(std::llround(p.timestamp * 1e9)) - stamp_ns) < 1000)
         return p.pose;
     }
@@ -55,7 +55,7 @@ class EurocOdometry : public ::testing::Test {
 
   TemporaryDirectory temp_;
   std::string asl_, bag_;
-  evaluation::Trajectory offline_;
+  io::Trajectory offline_;
 };
 
 TEST_F(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
@@ -141,7 +141,7 @@ TEST_F(EurocOdometry, BagThroughNodeletsMatchesOfflineRunner) {
   // ground truth: within 2.5 ms, a millimetre at these speeds.
   const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
   const auto ground_truth_at = [&](std::int64_t stamp_ns) {
-    const evaluation::Trajectory& truth = sequence.ground_truth();
+    const io::Trajectory& truth = sequence.ground_truth();
     const auto nearest =
         std::min_element(truth.begin(), truth.end(), [&](const auto& a, const auto& b) {
           return std::abs(a.timestamp - stamp_ns * 1e-9) < std::abs(b.timestamp - stamp_ns * 1e-9);

@@ -46,7 +46,7 @@ TEST(EurocToBag, V101MicroReadsBackFrameForFrame) {
     if (instance.getTopic() == "/ground_truth") {
       const auto pose = instance.instantiate<geometry_msgs::PoseStamped>();
       ASSERT_TRUE(pose);
-      const evaluation::StampedPose& truth = sequence.ground_truth()[poses++];
+      const io::StampedPose& truth = sequence.ground_truth()[poses++];
       EXPECT_NEAR(pose->header.stamp.toSec(), truth.timestamp, 1e-6);
       EXPECT_TRUE(ros_conversions::FromPoseMessage(pose->pose).isApprox(truth.pose, 1e-9));
       continue;

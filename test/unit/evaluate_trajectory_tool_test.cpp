@@ -9,8 +9,8 @@
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -46,7 +46,7 @@ class EvaluateTrajectoryTool : public ::testing::Test {
       estimate_.push_back(pose);
     }
     est_path_ = temp_.path() + "/estimate.txt";
-    evaluation::WriteTumTrajectory(estimate_, est_path_);
+    io::WriteTumTrajectory(estimate_, est_path_);
     camera_truth_ = camera_truth;
   }
 
@@ -68,7 +68,7 @@ TEST_F(EvaluateTrajectoryTool, JsonMatchesTheLibrary) {
       &status);
   ASSERT_EQ(status, 0) << json;
   const evaluation::EvaluationResult expected =
-      evaluation::EvaluateTrajectory(camera_truth_, evaluation::ReadTrajectory(est_path_), {});
+      evaluation::EvaluateTrajectory(camera_truth_, io::ReadTrajectory(est_path_), {});
   EXPECT_EQ(JsonNumber(json, "matched"), 200);
   EXPECT_NEAR(JsonNumber(json, "ate_rmse"), expected.ate.rmse, 1e-8);
   EXPECT_NEAR(JsonNumber(json, "ate_max"), expected.ate.max, 1e-8);
@@ -136,7 +136,7 @@ TEST_F(EvaluateTrajectoryTool, GroundTruthMovedToTheBase) {
       datasets::EurocSequence::Open(EurocSequencePath("MH01_first10s")).ground_truth(),
       T_body_base);
   const std::string base_path = temp_.path() + "/base.txt";
-  evaluation::WriteTumTrajectory(base, base_path);
+  io::WriteTumTrajectory(base, base_path);
   int status = -1;
   const std::string matched =
       Run("--gt " + gt_path_ + " --est " + base_path + " --gt-to-base " + calibration + " --json",
@@ -164,7 +164,7 @@ TEST_F(EvaluateTrajectoryTool, RepeatedStampsAreEvaluatedWithAWarning) {
     doubled.push_back(pose);
   }
   const std::string path = temp_.path() + "/doubled.txt";
-  evaluation::WriteTumTrajectory(doubled, path);
+  io::WriteTumTrajectory(doubled, path);
   int status = -1;
   const std::string output =
       Run("--gt " + gt_path_ + " --est " + path + " --gt-to-camera " + sensor_yaml_ + " --json",
@@ -180,7 +180,7 @@ TEST_F(EvaluateTrajectoryTool, ExtraPosesAreMeasuredWithTheEstimatesAlignment) {
   evaluation::Trajectory poses = {estimate_[50], estimate_[120]};
   poses[1].pose.translation() += Eigen::Vector3d(0.0, 0.1, 0.0);
   const std::string path = temp_.path() + "/poses.txt";
-  evaluation::WriteTumTrajectory(poses, path);
+  io::WriteTumTrajectory(poses, path);
   int status = -1;
   const std::string table = Run("--gt " + gt_path_ + " --est " + est_path_ + " --gt-to-camera " +
                                     sensor_yaml_ + " --poses " + path,
@@ -215,7 +215,7 @@ TEST_F(EvaluateTrajectoryTool, BadArgumentsAndFiles) {
   // Stamps that never meet: a clear message, not a crash.
   evaluation::Trajectory shifted = estimate_;
   for (auto& p : shifted) p.timestamp += 1000.0;
-  evaluation::WriteTumTrajectory(shifted, est_path_);
+  io::WriteTumTrajectory(shifted, est_path_);
   const std::string no_match = Run("--gt " + gt_path_ + " --est " + est_path_, &status);
   EXPECT_EQ(status, 1);
   EXPECT_NE(no_match.find("have a reference pose within"), std::string::npos) << no_match;

@@ -10,14 +10,14 @@
 
 #include <gtest/gtest.h>
 
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/io/csv_reader.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
-Eigen::Vector3d PositionAt(const evaluation::Trajectory& truth, double time) {
+Eigen::Vector3d PositionAt(const io::Trajectory& truth, double time) {
   double best = std::numeric_limits<double>::max();
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   for (const auto& pose : truth) {
@@ -62,8 +62,8 @@ TEST(LoopClosing, RenderedLoopIsClosedWithoutFalseLoops) {
 
   // Every accepted loop joins keyframes that were less than 1 m apart (ground truth, body
   // frame: the rig is rigid, so camera and body distances differ by nothing here).
-  const evaluation::Trajectory truth =
-      evaluation::ReadEurocTrajectory(sequence + "/mav0/state_groundtruth_estimate0/data.csv");
+  const io::Trajectory truth =
+      io::ReadEurocTrajectory(sequence + "/mav0/state_groundtruth_estimate0/data.csv");
   int accepted = 0, after_revisit = 0;
   const std::string loops = temp.path() + "/run/loops.csv";
   EXPECT_EQ(ReadTextFile(loops).rfind("query_keyframe,query_time,match_keyframe,match_time,"

@@ -32,14 +32,14 @@ Eigen::Isometry3d TrueTestFromReference() {
 // 250 points 2-12 m in front of the test camera (all inside its image), expressed in the
 // reference frame, with their projections and stereo points in the test frame. `noise` px on
 // every measurement; `outliers` of them replaced by random pixels and stereo points.
-odometry::PointMatches MakeMatches(const Eigen::Isometry3d& T_test_reference, double noise,
+geometry::PointMatches MakeMatches(const Eigen::Isometry3d& T_test_reference, double noise,
                                    double outliers, std::uint64_t seed) {
   std::mt19937_64 random(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> pixel_noise(0.0, noise > 0 ? noise : 1.0);
   const auto jitter = [&]() { return noise > 0 ? pixel_noise(random) : 0.0; };
   const Eigen::Isometry3d T_reference_test = T_test_reference.inverse();
-  odometry::PointMatches matches;
+  geometry::PointMatches matches;
   for (int i = 0; i < 250; ++i) {
     const double z = 2.0 + 10.0 * unit(random);
     const Eigen::Vector3d in_test((unit(random) * 740 + 6 - kCamera.cx) * z / kCamera.fx,
@@ -65,7 +65,7 @@ odometry::PointMatches MakeMatches(const Eigen::Isometry3d& T_test_reference, do
 
 TEST(PnpStudy, EveryKernelIsExactOnExactCorrespondences) {
   const Eigen::Isometry3d truth = TrueTestFromReference();
-  const odometry::PointMatches matches = MakeMatches(truth, 0.0, 0.0, 3);
+  const geometry::PointMatches matches = MakeMatches(truth, 0.0, 0.0, 3);
   double now = 0;
   const evaluation::Clock clock = [&now]() { return now += 1.0; };  // 1 ms between readings
   const std::vector<PnpKernel> kernels = evaluation::AllPnpKernels();
@@ -92,7 +92,7 @@ TEST(PnpStudy, EveryKernelIsExactOnExactCorrespondences) {
 
 TEST(PnpStudy, RansacKeepsEveryKernelCloseWithOutliers) {
   const Eigen::Isometry3d truth = TrueTestFromReference();
-  const odometry::PointMatches matches = MakeMatches(truth, 0.5, 0.3, 11);
+  const geometry::PointMatches matches = MakeMatches(truth, 0.5, 0.3, 11);
   evaluation::PnpStudyOptions options;
   options.ransac.max_iterations = 300;
   double now = 0;
@@ -117,7 +117,7 @@ TEST(PnpStudy, RansacKeepsEveryKernelCloseWithOutliers) {
 
 TEST(PnpStudy, TooFewMatchesFailEveryKernel) {
   const Eigen::Isometry3d truth = TrueTestFromReference();
-  odometry::PointMatches matches = MakeMatches(truth, 0.0, 0.0, 5);
+  geometry::PointMatches matches = MakeMatches(truth, 0.0, 0.0, 5);
   matches.correspondences.resize(10);
   matches.observations.resize(10);
   double now = 0;
@@ -172,7 +172,7 @@ TEST(PnpStudy, MatchesTheTestKeyPointsToTheReferenceStereoPoints) {
     test.points.emplace_back(0, k, 4);
     test.descriptors.push_back(descriptors.row(order[k]));
   }
-  const odometry::PointMatches matches =
+  const geometry::PointMatches matches =
       evaluation::MatchToReference(reference, test, cv::NORM_HAMMING, 80.0, 0.8);
   // Test key points 0, 2, 3 find reference points 3, 0, 2; 1 and 4 have no stereo partner.
   ASSERT_EQ(matches.correspondences.size(), 3u);

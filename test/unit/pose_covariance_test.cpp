@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "stereo_fabmap_slam/odometry/pose_refiner.h"
+#include "stereo_fabmap_slam/geometry/pose_refiner.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
@@ -69,20 +69,20 @@ TEST(PoseCovariance, PredictsTheScatterOfNoisyRefinements) {
   }
   const geometry::PoseCovariance predicted = geometry::StereoPoseCovariance(kCamera, observed, 1.0);
 
-  odometry::PoseRefinementOptions options;
+  geometry::PoseRefinementOptions options;
   options.sigma = 1.0;
   std::vector<Eigen::Matrix<double, 6, 1>> errors;
   geometry::PoseCovariance reported = geometry::PoseCovariance::Zero();
   for (int trial = 0; trial < 400; ++trial) {
-    std::vector<odometry::PoseObservation> observations;
+    std::vector<geometry::PoseObservation> observations;
     for (std::size_t i = 0; i < camera_points.size(); ++i) {
       const Eigen::Vector3d pixels = kCamera.Project(camera_points[i]);
       observations.push_back({T_world_camera * camera_points[i], pixels.x() + noise(random),
                               pixels.y() + noise(random),
                               stereo[i] ? pixels.z() + noise(random) : -1.0});
     }
-    const odometry::PoseRefinement refined =
-        odometry::RefinePose(observations, kCamera, T_world_camera.inverse(), options);
+    const geometry::PoseRefinement refined =
+        geometry::RefinePose(observations, kCamera, T_world_camera.inverse(), options);
     errors.push_back(RightError(T_world_camera, refined.T_camera_world.inverse()));
     reported += refined.covariance / 400.0;
   }

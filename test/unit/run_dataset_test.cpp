@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -38,7 +38,7 @@ TEST(RunDataset, Mh01IsTrackedAccuratelyAndDeterministically) {
   EXPECT_EQ(trajectory, ReadTextFile(temp.path() + "/b/trajectory.txt"));
   EXPECT_EQ(ReadTextFile(temp.path() + "/a/keyframes.txt"),
             ReadTextFile(temp.path() + "/b/keyframes.txt"));
-  EXPECT_EQ(evaluation::ReadTumTrajectory(temp.path() + "/a/trajectory.txt").size(), 200u);
+  EXPECT_EQ(io::ReadTumTrajectory(temp.path() + "/a/trajectory.txt").size(), 200u);
   // timing.csv: a header and a line per frame.
   const std::string timing = ReadTextFile(temp.path() + "/a/timing.csv");
   EXPECT_EQ(std::count(timing.begin(), timing.end(), '\n'), 201);
@@ -148,10 +148,9 @@ TEST(RunDataset, Mh01MapSavedLoadedAndUsedForLocalization) {
   EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.01);
   // In the map's frame, without any alignment: where the mapping run put the camera (measured
   // 0.7 mm RMS; the map's keyframes are 0.5 cm from ground truth, so 5 mm bounds a good fit).
-  const evaluation::Trajectory mapped =
-      evaluation::ReadTumTrajectory(temp.path() + "/mapping/trajectory.txt");
-  const evaluation::Trajectory localized =
-      evaluation::ReadTumTrajectory(temp.path() + "/localization/trajectory.txt");
+  const io::Trajectory mapped = io::ReadTumTrajectory(temp.path() + "/mapping/trajectory.txt");
+  const io::Trajectory localized =
+      io::ReadTumTrajectory(temp.path() + "/localization/trajectory.txt");
   ASSERT_EQ(mapped.size(), localized.size());
   double squared = 0;
   for (std::size_t i = 0; i < mapped.size(); ++i) {

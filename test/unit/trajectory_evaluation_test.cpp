@@ -5,15 +5,16 @@
 #include <gtest/gtest.h>
 
 #include "stereo_fabmap_slam/evaluation/association.h"
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
 using namespace evaluation;  // NOLINT: the module under test
+using namespace io;          // NOLINT: its trajectory files
 
 Eigen::Isometry3d MakePose(double yaw, double pitch, double roll, const Eigen::Vector3d& t) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();

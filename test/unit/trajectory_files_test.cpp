@@ -5,16 +5,16 @@
 
 #include <gtest/gtest.h>
 
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
 
-using evaluation::ReadTrajectory;
-using evaluation::TrajectoryFileNotes;
+using io::ReadTrajectory;
+using io::TrajectoryFileNotes;
 
 TEST(TrajectoryFiles, TumAsOtherToolsWriteIt) {
   TemporaryDirectory temp;

@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
-#include "stereo_fabmap_slam/evaluation/trajectory.h"
+#include "stereo_fabmap_slam/io/trajectory.h"
 
 namespace stereo_fabmap_slam::datasets {
 
@@ -52,7 +52,7 @@ class EurocSequence {
   const camera::StereoCalibration& calibration() const { return calibration_; }
   bool has_ground_truth() const { return !ground_truth_.empty(); }
   // Pose of the body (IMU) frame in the world frame; empty without ground truth.
-  const evaluation::Trajectory& ground_truth() const { return ground_truth_; }
+  const io::Trajectory& ground_truth() const { return ground_truth_; }
   // Images in one camera's list that have no partner in the other's.
   const std::vector<UnpairedImage>& unpaired() const { return unpaired_; }
   const std::string& mav0_directory() const { return mav0_; }
@@ -64,7 +64,7 @@ class EurocSequence {
   std::vector<StereoFrameEntry> frames_;
   std::vector<UnpairedImage> unpaired_;
   camera::StereoCalibration calibration_;
-  evaluation::Trajectory ground_truth_;
+  io::Trajectory ground_truth_;
 };
 
 }  // namespace stereo_fabmap_slam::datasets

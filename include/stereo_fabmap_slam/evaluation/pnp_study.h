@@ -9,9 +9,8 @@
 
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/geometry/pose_refiner.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
-#include "stereo_fabmap_slam/odometry/odometry_options.h"
-#include "stereo_fabmap_slam/odometry/pose_refiner.h"
 
 namespace stereo_fabmap_slam::evaluation {
 
@@ -24,7 +23,7 @@ struct PnpStudyOptions {
   double match_ratio = 0.8;
   // The kernel field is overwritten by each kernel in turn; everything else is shared.
   geometry::PnpRansacOptions ransac;
-  odometry::PoseRefinementOptions refinement;
+  geometry::PoseRefinementOptions refinement;
   // An estimate is a success when its consensus (RANSAC's, or the refinement's inliers) holds at
   // least this many correspondences: below it the relocalizer would reject the pose too.
   int min_inliers = 20;
@@ -59,7 +58,7 @@ struct PnpTrial {
 // points (train), in the two forms RANSAC and the refinement take. The 3-D points are in the
 // reference camera frame; each correspondence carries the test frame's own stereo point where it
 // has one (the UMEYAMA kernel's input).
-odometry::PointMatches MatchToReference(const features::StereoFeatures& reference,
+geometry::PointMatches MatchToReference(const features::StereoFeatures& reference,
                                         const features::StereoFeatures& test, int descriptor_norm,
                                         double max_descriptor_distance, double match_ratio);
 
@@ -70,7 +69,7 @@ using Clock = std::function<double()>;
 // kernel (without refinement, then with it). The refined trial refines the unrefined trial's
 // pose from its RANSAC inliers, so the two differ only by the refinement. A kernel that throws
 // (OpenCV rejects a configuration) counts as a failed estimate.
-std::vector<PnpTrial> RunPnpKernels(const odometry::PointMatches& matches,
+std::vector<PnpTrial> RunPnpKernels(const geometry::PointMatches& matches,
                                     const geometry::StereoCamera& camera,
                                     const Eigen::Isometry3d& true_T_camera_reference,
                                     const std::vector<geometry::PnpKernel>& kernels,

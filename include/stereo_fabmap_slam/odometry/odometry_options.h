@@ -3,17 +3,10 @@
 #include <string>
 
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/geometry/pose_refiner.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 
 namespace stereo_fabmap_slam::odometry {
-
-struct PoseRefinementOptions {
-  double sigma = 1.0;   // [px] key point position noise
-  int rounds = 2;       // optimise, re-classify outliers, optimise again...
-  int iterations = 10;  // Levenberg-Marquardt iterations a round
-  void Visit(io::OptionVisitor& visitor);
-  void Validate() const;
-};
 
 struct KeyframePolicyOptions {
   static constexpr char kSection[] = "keyframes";
@@ -73,7 +66,7 @@ struct TrackerOptions {
   // The motion model predicts well up to about 0.1 s at the speeds of a MAV or a hand-held
   // camera; MH01's close pass over pallets is the hardest stretch we have.
   double catch_up_gap = 0.1;
-  PoseRefinementOptions refinement;
+  geometry::PoseRefinementOptions refinement;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;

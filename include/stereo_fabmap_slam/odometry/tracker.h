@@ -13,6 +13,7 @@
 
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
+#include "stereo_fabmap_slam/geometry/pose_refiner.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 #include "stereo_fabmap_slam/map/keyframe.h"
@@ -20,7 +21,6 @@
 #include "stereo_fabmap_slam/odometry/keyframe_policy.h"
 #include "stereo_fabmap_slam/odometry/local_map.h"
 #include "stereo_fabmap_slam/odometry/odometry_options.h"
-#include "stereo_fabmap_slam/odometry/pose_refiner.h"
 
 namespace stereo_fabmap_slam::odometry {
 
@@ -98,8 +98,8 @@ class Tracker {
                                 const std::vector<Match>& matches,
                                 const geometry::PnpRansacOptions& ransac_options,
                                 const Eigen::Isometry3d& guess) const;
-  std::vector<PoseObservation> Observations(const features::StereoFeatures& features,
-                                            const std::vector<Match>& matches) const;
+  std::vector<geometry::PoseObservation> Observations(const features::StereoFeatures& features,
+                                                      const std::vector<Match>& matches) const;
   map::Keyframe MakeKeyframe(double timestamp, features::StereoFeatures features,
                              const Eigen::Isometry3d& T_world_camera,
                              const std::vector<Match>& inlier_matches, bool starts_new_map);

@@ -8,8 +8,8 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
-#include "stereo_fabmap_slam/evaluation/trajectory.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
+#include "stereo_fabmap_slam/io/trajectory.h"
 #include "stereo_fabmap_slam/pipeline/backend.h"
 #include "stereo_fabmap_slam/pipeline/loop_closing.h"
 #include "stereo_fabmap_slam/pipeline/relocalization.h"
@@ -86,9 +86,9 @@ class StereoSlam {
   // odom (the odometry, without loop closing) and in map (after loop closing; the same as the
   // odometry while no loop was closed or loop closing is off). The map trajectory holds the
   // frames that have a pose in the map: not those of a piece of odometry never found in it.
-  evaluation::Trajectory OdometryTrajectory() const;
-  evaluation::Trajectory MapTrajectory() const;
-  evaluation::Trajectory KeyframeTrajectory() const;
+  io::Trajectory OdometryTrajectory() const;
+  io::Trajectory MapTrajectory() const;
+  io::Trajectory KeyframeTrajectory() const;
   const std::vector<FrameRecord>& frames() const { return frames_; }
   double KeyframeTime(std::int64_t id) const { return keyframe_times_.at(id); }
   int descriptor_norm() const { return front_end_.descriptor_norm(); }

@@ -11,6 +11,7 @@
 #include "stereo_fabmap_slam/map/keyframe_database.h"
 #include "stereo_fabmap_slam/map/loop_edge.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/geometric_verification.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 #include "stereo_fabmap_slam/place_recognition/vocabulary.h"
 
@@ -103,9 +104,7 @@ class LoopDetector {
   LoopDetectorOptions options_;
   Vocabulary vocabulary_;
   FabMap fabmap_;
-  geometry::StereoCamera camera_;
-  int descriptor_norm_;
-  double max_descriptor_distance_;
+  GeometricVerifier verifier_;
   std::uint64_t vocabulary_fingerprint_;
   map::KeyframeDatabase database_;
   std::vector<std::int64_t> place_keyframes_;  // FAB-MAP place index -> keyframe id

@@ -11,6 +11,7 @@
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/map/keyframe_database.h"
+#include "stereo_fabmap_slam/place_recognition/geometric_verification.h"
 #include "stereo_fabmap_slam/place_recognition/loop_detector.h"
 #include "stereo_fabmap_slam/relocalization/relocalization_options.h"
 
@@ -81,6 +82,7 @@ class Relocalizer {
   geometry::StereoCamera camera_;
   int descriptor_norm_;
   double max_descriptor_distance_;
+  place_recognition::GeometricVerifier verifier_;
 };
 
 }  // namespace stereo_fabmap_slam::relocalization

@@ -1,4 +1,4 @@
-#include "stereo_fabmap_slam/evaluation/trajectory_io.h"
+#include "stereo_fabmap_slam/io/trajectory_file.h"
 
 #include <cerrno>
 #include <cmath>
@@ -9,15 +9,8 @@
 
 #include "stereo_fabmap_slam/io/csv_reader.h"
 
-namespace stereo_fabmap_slam::evaluation {
+namespace stereo_fabmap_slam::io {
 namespace {
-
-using io::FileError;
-using io::ParseDouble;
-using io::ParseInt64;
-using io::ReadDelimitedText;
-using io::Separator;
-using io::TextRow;
 
 // Finite numbers: NaN or infinity in a trajectory cannot be meant.
 std::vector<double> ParseNumbers(const TextRow& row, const std::string& path, std::size_t first,
@@ -225,4 +218,4 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFileNotes* notes) {
   return ReadTrajectory(path, DetectTrajectoryFormat(path), notes);
 }
 
-}  // namespace stereo_fabmap_slam::evaluation
+}  // namespace stereo_fabmap_slam::io

@@ -2,9 +2,9 @@
 
 #include <string>
 
-#include "stereo_fabmap_slam/evaluation/trajectory.h"
+#include "stereo_fabmap_slam/io/trajectory.h"
 
-namespace stereo_fabmap_slam::evaluation {
+namespace stereo_fabmap_slam::io {
 
 enum class TrajectoryFormat {
   kTum,    // "t x y z qx qy qz qw[ more]", t in seconds, whitespace separated
@@ -42,4 +42,4 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format,
 // The detected format.
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFileNotes* notes = nullptr);
 
-}  // namespace stereo_fabmap_slam::evaluation
+}  // namespace stereo_fabmap_slam::io

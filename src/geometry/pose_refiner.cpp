@@ -1,4 +1,4 @@
-#include "stereo_fabmap_slam/odometry/pose_refiner.h"
+#include "stereo_fabmap_slam/geometry/pose_refiner.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -9,9 +9,24 @@
 #include "stereo_fabmap_slam/geometry/pose_parameters.h"
 #include "stereo_fabmap_slam/geometry/reprojection_error.h"
 
-namespace stereo_fabmap_slam::odometry {
+namespace stereo_fabmap_slam::geometry {
 
-PointMatches MatchedPoints(const features::StereoFeatures& frame,
+void PoseRefinementOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("sigma", &sigma);
+  visitor.Visit("rounds", &rounds);
+  visitor.Visit("iterations", &iterations);
+}
+
+void PoseRefinementOptions::Validate() const {
+  if (!(sigma > 0)) throw std::invalid_argument("pose refinement sigma must be > 0");
+  if (rounds < 1 || iterations < 1) {
+    throw std::invalid_argument("pose refinement rounds and iterations must be >= 1");
+  }
+}
+
+PointMatches MatchedPoints(const std::vector<cv::KeyPoint>& keypoints,
+                           const std::vector<float>& u_right,
+                           const std::vector<Eigen::Vector3d>& frame_points,
                            const std::vector<Eigen::Vector3d>& points,
                            const std::vector<cv::DMatch>& matches) {
   PointMatches matched;
@@ -20,25 +35,25 @@ PointMatches MatchedPoints(const features::StereoFeatures& frame,
   for (const cv::DMatch& match : matches) {
     const std::size_t i = static_cast<std::size_t>(match.queryIdx);
     const Eigen::Vector3d& point = points[static_cast<std::size_t>(match.trainIdx)];
-    const cv::Point2f& pixel = frame.keypoints[i].pt;
+    const cv::Point2f& pixel = keypoints[i].pt;
     matched.correspondences.push_back(
-        {point, Eigen::Vector2d(pixel.x, pixel.y), frame.HasDepth(i), frame.points[i]});
-    matched.observations.push_back({point, pixel.x, pixel.y, frame.u_right[i]});
+        {point, Eigen::Vector2d(pixel.x, pixel.y), u_right[i] >= 0.0f, frame_points[i]});
+    matched.observations.push_back({point, pixel.x, pixel.y, u_right[i]});
   }
   return matched;
 }
 
 PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
-                          const geometry::StereoCamera& camera, const Eigen::Isometry3d& initial,
+                          const StereoCamera& camera, const Eigen::Isometry3d& initial,
                           const PoseRefinementOptions& options,
                           const std::vector<bool>* initial_inliers) {
   PoseRefinement result;
   result.T_camera_world = initial;
   result.inlier =
       initial_inliers != nullptr ? *initial_inliers : std::vector<bool>(observations.size(), true);
-  ceres::HuberLoss loss(std::sqrt(geometry::kChiSquare95ThreeDof));
+  ceres::HuberLoss loss(std::sqrt(kChiSquare95ThreeDof));
   for (int round = 0; round < options.rounds; ++round) {
-    geometry::PoseParameters pose = geometry::PoseParameters::FromTransform(result.T_camera_world);
+    PoseParameters pose = PoseParameters::FromTransform(result.T_camera_world);
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
@@ -46,9 +61,9 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (!result.inlier[i]) continue;
       const PoseObservation& o = observations[i];
-      problem.AddResidualBlock(geometry::FixedPointReprojectionError::Create(
-                                   camera, o.world, o.u, o.v, o.u_right, options.sigma),
-                               &loss, pose.rotation, pose.translation);
+      problem.AddResidualBlock(
+          FixedPointReprojectionError::Create(camera, o.world, o.u, o.v, o.u_right, options.sigma),
+          &loss, pose.rotation, pose.translation);
       ++residual_blocks;
     }
     if (residual_blocks < 3) break;
@@ -66,22 +81,21 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
     result.inliers = 0;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const PoseObservation& o = observations[i];
-      const double chi2 = geometry::SquaredReprojectionError(camera, result.T_camera_world, o.world,
-                                                             o.u, o.v, o.u_right, options.sigma);
-      result.inlier[i] =
-          chi2 < (o.u_right >= 0 ? geometry::kChiSquare95ThreeDof : geometry::kChiSquare95TwoDof);
+      const double chi2 = SquaredReprojectionError(camera, result.T_camera_world, o.world, o.u, o.v,
+                                                   o.u_right, options.sigma);
+      result.inlier[i] = chi2 < (o.u_right >= 0 ? kChiSquare95ThreeDof : kChiSquare95TwoDof);
       result.inliers += result.inlier[i] ? 1 : 0;
     }
   }
-  std::vector<geometry::ObservedPoint> inlier_points;
+  std::vector<ObservedPoint> inlier_points;
   inlier_points.reserve(static_cast<std::size_t>(result.inliers));
   for (std::size_t i = 0; i < observations.size(); ++i) {
     if (!result.inlier[i]) continue;
     inlier_points.push_back(
         {result.T_camera_world * observations[i].world, observations[i].u_right >= 0});
   }
-  result.covariance = geometry::StereoPoseCovariance(camera, inlier_points, options.sigma);
+  result.covariance = StereoPoseCovariance(camera, inlier_points, options.sigma);
   return result;
 }
 
-}  // namespace stereo_fabmap_slam::odometry
+}  // namespace stereo_fabmap_slam::geometry
