@@ -18,7 +18,7 @@ LocalBundleAdjuster::LocalBundleAdjuster(const BundleAdjustmentOptions& options,
     : options_((options.Validate(), options)), camera_(camera) {}
 
 map::KeyframeUpdate LocalBundleAdjuster::AddKeyframe(const map::Keyframe& data, bool optimise) {
-  if (data.starts_new_map) window_.clear();  // the old map is unrelated: no shared gauge
+  if (data.starts_new_segment) window_.clear();  // the old map is unrelated: no shared gauge
   Keyframe& keyframe = keyframes_[data.id];
   keyframe.T_world_camera = data.T_world_camera;
   for (std::size_t i = 0; i < data.map_point_ids.size(); ++i) {

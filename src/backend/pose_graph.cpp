@@ -59,10 +59,10 @@ void PoseGraph::AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_cam
   } else {
     const Keyframe& previous = keyframes_.back();
     keyframe.segment = previous.segment;
-    const Segment& component = segments_[ComponentOf(keyframe.segment)];
-    if (component.loops == 0) {
+    const Segment& piece = segments_[PieceOf(keyframe.segment)];
+    if (piece.loops == 0) {
       // Exactly the odometry pose under the segment's correction, without rounding piling up.
-      keyframe.SetMapPose(component.T_map_odom * T_odom_camera);
+      keyframe.SetMapPose(piece.T_map_odom * T_odom_camera);
     } else {
       // Corrected like its predecessor, so it is consistent before the next optimisation.
       keyframe.SetMapPose(previous.MapPose() * (previous.T_odom_camera.inverse() * T_odom_camera));
@@ -74,8 +74,8 @@ void PoseGraph::AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_cam
 void PoseGraph::UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
   Keyframe& keyframe = keyframes_[IndexOf(id)];
   keyframe.T_odom_camera = T_odom_camera;
-  const Segment& component = segments_[ComponentOf(keyframe.segment)];
-  if (component.loops == 0) keyframe.SetMapPose(component.T_map_odom * T_odom_camera);
+  const Segment& piece = segments_[PieceOf(keyframe.segment)];
+  if (piece.loops == 0) keyframe.SetMapPose(piece.T_map_odom * T_odom_camera);
 }
 
 void PoseGraph::AddLoop(const map::LoopEdge& edge, PoseGraphEdgeType type) {
@@ -102,29 +102,29 @@ void PoseGraph::AddLoop(const map::LoopEdge& edge, PoseGraphEdgeType type) {
   // information = L * L^T, so S = L^T gives |S * e|^2 = e^T * information * e.
   loop.sqrt_information = cholesky.matrixU();
 
-  const int match_component = ComponentOf(keyframes_[loop.match].segment);
-  const int query_component = ComponentOf(keyframes_[loop.query].segment);
-  int component = match_component;
-  if (match_component != query_component) {
-    // The younger component (higher root) moves, so the older one keeps its gauge.
-    const int moving = std::max(match_component, query_component);
-    component = std::min(match_component, query_component);
+  const int match_piece = PieceOf(keyframes_[loop.match].segment);
+  const int query_piece = PieceOf(keyframes_[loop.query].segment);
+  int piece = match_piece;
+  if (match_piece != query_piece) {
+    // The younger piece (higher root) moves, so the older one keeps its gauge.
+    const int moving = std::max(match_piece, query_piece);
+    piece = std::min(match_piece, query_piece);
     const Keyframe& match = keyframes_[loop.match];
     const Keyframe& query = keyframes_[loop.query];
     // Correction taking the moving keyframe of the edge to where the edge puts it.
     const Eigen::Isometry3d correction =
-        moving == query_component
+        moving == query_piece
             ? match.MapPose() * loop.T_match_query * query.MapPose().inverse()
             : query.MapPose() * loop.T_match_query.inverse() * match.MapPose().inverse();
     for (Keyframe& keyframe : keyframes_) {
-      if (ComponentOf(keyframe.segment) == moving) {
+      if (PieceOf(keyframe.segment) == moving) {
         keyframe.SetMapPose(correction * keyframe.MapPose());
       }
     }
-    segments_[moving].parent = component;
-    segments_[component].loops += segments_[moving].loops;
+    segments_[moving].parent = piece;
+    segments_[piece].loops += segments_[moving].loops;
   }
-  ++segments_[component].loops;
+  ++segments_[piece].loops;
   loops_.push_back(loop);
 }
 
@@ -177,21 +177,21 @@ std::vector<bool> PoseGraph::WindowAroundLoops(std::size_t first_loop) const {
 
 PoseGraphSummary PoseGraph::Optimize() {
   PoseGraphSummary result;
-  // Without loops every component follows its odometry, which the map poses already do.
+  // Without loops every piece follows its odometry, which the map poses already do.
   if (loops_.empty()) return result;
   bool local = optimised_ && options_.local_keyframes > 0 && loops_optimised_ < loops_.size();
   for (std::size_t l = loops_optimised_; local && l < loops_.size(); ++l) {
     local = LoopChiSquare(loops_[l]) < options_.consistent_loop_chi2;
   }
   // Keyframes whose poses move: in a local optimisation the window around the new loops, else
-  // every keyframe of a component with loops. Edges with one end outside hold it fixed.
+  // every keyframe of a piece with loops. Edges with one end outside hold it fixed.
   std::vector<bool> moving;
   if (local) {
     moving = WindowAroundLoops(loops_optimised_);
   } else {
     moving.resize(keyframes_.size());
     for (std::size_t i = 0; i < keyframes_.size(); ++i) {
-      moving[i] = segments_[ComponentOf(keyframes_[i].segment)].loops > 0;
+      moving[i] = segments_[PieceOf(keyframes_[i].segment)].loops > 0;
     }
   }
   // Shared by all residual blocks, hence not owned by the problem.
@@ -231,7 +231,7 @@ PoseGraphSummary PoseGraph::Optimize() {
       ++result.moved_keyframes;
     }
   }
-  // Gauge: each component's oldest keyframe, the first of its root segment. (A local window
+  // Gauge: each piece's oldest keyframe, the first of its root segment. (A local window
   // that does not reach it is held by the fixed keyframes around it.)
   for (std::size_t s = 0; s < segments_.size(); ++s) {
     if (segments_[s].parent != static_cast<int>(s) || segments_[s].loops == 0) continue;
@@ -319,10 +319,14 @@ void PoseGraph::RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_c
 }
 
 bool PoseGraph::Connected(std::int64_t a, std::int64_t b) const {
-  return ComponentOf(keyframes_[IndexOf(a)].segment) == ComponentOf(keyframes_[IndexOf(b)].segment);
+  return PieceOf(keyframes_[IndexOf(a)].segment) == PieceOf(keyframes_[IndexOf(b)].segment);
 }
 
-int PoseGraph::ComponentOf(int segment) const {
+bool PoseGraph::InMap(std::int64_t id) const {
+  return Contains(id) && Connected(id, keyframes_.front().id);
+}
+
+int PoseGraph::PieceOf(int segment) const {
   // No path compression: there is one segment per tracking loss, so the chains stay short.
   while (segments_[segment].parent != segment) segment = segments_[segment].parent;
   return segment;

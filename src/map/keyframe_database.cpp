@@ -12,7 +12,7 @@ const StoredKeyframe& KeyframeDatabase::Add(Keyframe keyframe, std::vector<int> 
                                 std::to_string(keyframes_.rbegin()->first));
   }
   StoredKeyframe stored;
-  if (keyframes_.empty() || keyframe.starts_new_map) {
+  if (keyframes_.empty() || keyframe.starts_new_segment) {
     ++segment_;
   } else {
     const StoredKeyframe& previous = keyframes_.rbegin()->second;

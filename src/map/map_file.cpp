@@ -70,7 +70,7 @@ void PutKeyframe(io::BinaryWriter* writer, const SavedKeyframe& saved) {
   const Keyframe& k = saved.keyframe;
   writer->Put<std::int64_t>(k.id);
   writer->Put<double>(k.timestamp);
-  writer->Put<std::uint8_t>(k.starts_new_map ? 1 : 0);
+  writer->Put<std::uint8_t>(k.starts_new_segment ? 1 : 0);
   writer->Put(Pack(k.T_world_camera));
   writer->Put(Pack(saved.T_map_camera));
   std::vector<PackedKeypoint> keypoints;
@@ -92,7 +92,7 @@ SavedKeyframe GetKeyframe(io::BinaryReader* reader) {
   Keyframe& k = saved.keyframe;
   k.id = reader->Get<std::int64_t>();
   k.timestamp = reader->Get<double>();
-  k.starts_new_map = reader->Get<std::uint8_t>() != 0;
+  k.starts_new_segment = reader->Get<std::uint8_t>() != 0;
   k.T_world_camera = Unpack(reader->Get<PackedPose>(), reader);
   saved.T_map_camera = Unpack(reader->Get<PackedPose>(), reader);
   for (const PackedKeypoint& p : reader->GetVector<PackedKeypoint>()) {

@@ -1,10 +1,8 @@
-// Backend: keyframes and loop edges in; windowed bundle adjustment (odom frame) and the pose
-// graph (map frame) in a worker thread it owns; keyframe_updates, map_graph and tf map -> odom
-// out. A map loaded by the LoopDetector (map_loaded) replaces the pose graph; in localization
-// mode (the LoopDetector's mode topic) the graph is not extended and map -> odom is the
-// StereoTracker's latest relocalization (map_to_odom_correction). The algorithms are
-// backend::LocalBundleAdjuster and backend::PoseGraph.
-#include <atomic>
+// Backend: the mapping stage (pipeline::MappingStage) in the nodelet graph. Keyframes, the
+// LoopDetector's place results and relocalization edges, loaded maps, the mode and localization's
+// map -> odom in; keyframe_updates (one per keyframe), map_graph and tf map -> odom out. The
+// stage decides; this file queues every input in arrival order for a worker thread it owns,
+// converts, calls and publishes.
 #include <condition_variable>
 #include <deque>
 #include <memory>
@@ -12,7 +10,7 @@
 #include <optional>
 #include <string>
 #include <thread>
-#include <vector>
+#include <variant>
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
@@ -24,145 +22,219 @@
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
-#include "stereo_fabmap_slam/backend/pose_graph.h"
+#include "stage_conversions.h"
 #include "stereo_fabmap_slam/map/map_file.h"
-#include "stereo_fabmap_slam/pipeline/loop_closing.h"
+#include "stereo_fabmap_slam/pipeline/mapping_stage.h"
+#include "tracker_wiring.h"
 
 namespace stereo_fabmap_slam {
 
 class BackendNodelet : public nodelet::Nodelet {
  public:
-  ~BackendNodelet() override;
+  ~BackendNodelet() override {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    wake_.notify_all();
+    if (worker_.joinable()) worker_.join();
+  }
 
  private:
-  void onInit() override;
-  void OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe);
-  void OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop);
-  void OnTfTimer(const ros::WallTimerEvent&);
-  void OnMapLoaded(const stereo_fabmap_slam::MapLoadedConstPtr& message);
-  void OnMode(const std_msgs::StringConstPtr& message);
-  void OnCorrection(const geometry_msgs::TransformStampedConstPtr& message);
-  void Work();
-  // Adds to the graph the loop edges whose keyframes it has (the LoopDetector may be ahead of
-  // the bundle adjustment); true if any was added. The others wait.
-  struct Edge {
-    map::LoopEdge edge;
-    backend::PoseGraphEdgeType type;  // a loop, or a relocalization
+  struct LoadMap {
+    std::string path;
   };
-  bool AddReadyLoops(backend::PoseGraph* graph, std::deque<Edge>* loops);
+  struct Correction {
+    Eigen::Isometry3d T_map_odom;
+  };
+  // Every input, in the order it arrived: the stage takes them so.
+  using Input =
+      std::variant<stereo_fabmap_slam::KeyframeConstPtr, stereo_fabmap_slam::PlaceResultConstPtr,
+                   stereo_fabmap_slam::LoopEdgeConstPtr, LoadMap, pipeline::SlamMode, Correction>;
 
-  backend::BundleAdjustmentOptions options_;
-  backend::PoseGraphOptions pose_graph_options_;
+  void onInit() override;
+  void Push(Input input) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      inputs_.push_back(std::move(input));
+    }
+    wake_.notify_one();
+  }
+  void Work();
+  // Returns whether the map changed (map_graph is published again).
+  bool Apply(const Input& input, bool optimise, ros::Time* stamp);
+  void OnTfTimer(const ros::WallTimerEvent&);
+
   std::string map_frame_, odom_frame_;
-  ros::Subscriber keyframe_subscriber_, loop_subscriber_, map_loaded_subscriber_, mode_subscriber_,
-      correction_subscriber_;
+  std::optional<pipeline::MappingStage> stage_;  // the worker's only
+  ros::Subscriber keyframe_subscriber_, place_subscriber_, edge_subscriber_, loaded_subscriber_,
+      mode_subscriber_, correction_subscriber_;
   ros::Publisher update_publisher_, graph_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   ros::WallTimer tf_timer_;
   ros::Time last_tf_stamp_;  // only the timer's thread touches it
-
   std::mutex mutex_;
   std::condition_variable wake_;
-  // Keyframes and loop edges not yet in the map. Never bounded by dropping: a keyframe missing
-  // from the map would leave a hole in the graph. Under load the worker adjusts the newest of
-  // them together and skips the optimisations in between (see Work()).
-  std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
-  std::deque<Edge> loop_queue_;
-  std::optional<std::string> map_to_load_;    // a loaded map's file, for the worker
-  std::atomic<bool> localization_{false};     // localization mode: the graph is not extended
-  std::atomic<bool> mapping_resumed_{false};  // set when localization mode ends
+  // Never bounded by dropping: a keyframe missing from the map would leave a hole in the graph.
+  // Under load the worker adjusts the newest of the waiting keyframes together (see Work()).
+  std::deque<Input> inputs_;
   bool stopping_ = false;
   std::thread worker_;
-
   std::mutex map_to_odom_mutex_;
-  Eigen::Isometry3d map_to_odom_ = Eigen::Isometry3d::Identity();  // the graph's latest
+  Eigen::Isometry3d map_to_odom_ = Eigen::Isometry3d::Identity();
 };
 
 void BackendNodelet::onInit() {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
-  try {
-    options_ = ros_parameters::ReadModuleOptions(private_node, options_);
-    pose_graph_options_ = ros_parameters::ReadModuleOptions(private_node, pose_graph_options_);
+  backend::BundleAdjustmentOptions options;
+  backend::PoseGraphOptions pose_graph_options;
+  try {  // before any ROS object exists: a throw unloads cleanly
+    options = ros_parameters::ReadModuleOptions(private_node, options);
+    pose_graph_options = ros_parameters::ReadModuleOptions(private_node, pose_graph_options);
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
   NODELET_INFO_STREAM("options in force:\n"
-                      << ros_parameters::PrintedOptions(options_)
-                      << ros_parameters::PrintedOptions(pose_graph_options_));
+                      << ros_parameters::PrintedOptions(options)
+                      << ros_parameters::PrintedOptions(pose_graph_options));
+  stage_.emplace(options, pose_graph_options, ros_wiring::SteadyMilliseconds);
   map_frame_ = private_node.param<std::string>("map_frame", "map");
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
   const double tf_rate = private_node.param("tf_rate", 20.0);
-  // A user whose map -> odom comes from elsewhere turns the package's tf off.
-  const bool publish_tf = private_node.param("publish_tf", true);
-
   ros::NodeHandle& node = getNodeHandle();
   update_publisher_ = node.advertise<stereo_fabmap_slam::KeyframeUpdate>("keyframe_updates", 100);
   graph_publisher_ = node.advertise<stereo_fabmap_slam::MapGraph>("map_graph", 1, true);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   worker_ = std::thread(&BackendNodelet::Work, this);
-  keyframe_subscriber_ = node.subscribe("keyframes", 100, &BackendNodelet::OnKeyframe, this);
-  loop_subscriber_ = node.subscribe("loop_edges", 100, &BackendNodelet::OnLoopEdge, this);
-  map_loaded_subscriber_ = node.subscribe("map_loaded", 1, &BackendNodelet::OnMapLoaded, this);
-  mode_subscriber_ = node.subscribe("mode", 1, &BackendNodelet::OnMode, this);
-  correction_subscriber_ =
-      node.subscribe("map_to_odom_correction", 10, &BackendNodelet::OnCorrection, this);
+  keyframe_subscriber_ = node.subscribe<stereo_fabmap_slam::Keyframe>(
+      "keyframes", 100, [this](const stereo_fabmap_slam::KeyframeConstPtr& m) { Push(m); });
+  place_subscriber_ = node.subscribe<stereo_fabmap_slam::PlaceResult>(
+      "place_results", 100, [this](const stereo_fabmap_slam::PlaceResultConstPtr& m) { Push(m); });
+  edge_subscriber_ = node.subscribe<stereo_fabmap_slam::LoopEdge>(
+      "relocalization_edges", 100,
+      [this](const stereo_fabmap_slam::LoopEdgeConstPtr& m) { Push(m); });
+  loaded_subscriber_ = node.subscribe<stereo_fabmap_slam::MapLoaded>(
+      "map_loaded", 1,
+      [this](const stereo_fabmap_slam::MapLoadedConstPtr& m) { Push(LoadMap{m->path}); });
+  mode_subscriber_ =
+      node.subscribe<std_msgs::String>("mode", 1, [this](const std_msgs::StringConstPtr& m) {
+        if (const auto mode = pipeline::ParseSlamMode(m->data)) Push(*mode);
+      });
+  correction_subscriber_ = node.subscribe<geometry_msgs::TransformStamped>(
+      "map_to_odom_correction", 10, [this](const geometry_msgs::TransformStampedConstPtr& m) {
+        Push(Correction{ros_conversions::FromTransformMessage(m->transform)});
+      });
   // map -> odom is broadcast steadily, not only when it changes, so that tf can look up any
-  // recent time without extrapolating.
-  if (publish_tf) {
+  // recent time without extrapolating. A user whose map -> odom comes from elsewhere turns the
+  // package's tf off.
+  if (private_node.param("publish_tf", true)) {
     tf_timer_ =
         node.createWallTimer(ros::WallDuration(1.0 / tf_rate), &BackendNodelet::OnTfTimer, this);
   }
 }
 
-BackendNodelet::~BackendNodelet() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    stopping_ = true;
+void BackendNodelet::Work() {
+  while (true) {
+    std::deque<Input> waiting;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [&] { return stopping_ || !inputs_.empty(); });
+      if (stopping_) return;
+      waiting.swap(inputs_);
+    }
+    // Every keyframe enters the map; only the newest of those waiting is followed by a bundle
+    // adjustment, whose window covers the others.
+    std::size_t keyframes = 0, seen = 0;
+    for (const Input& input : waiting) {
+      keyframes += std::holds_alternative<stereo_fabmap_slam::KeyframeConstPtr>(input) ? 1 : 0;
+    }
+    if (keyframes > 1) {
+      NODELET_WARN_THROTTLE(5,
+                            "bundle adjustment falls behind: %zu keyframes added in one "
+                            "optimisation",
+                            keyframes);
+    }
+    bool changed = false;
+    ros::Time stamp;
+    const std::uint64_t optimisations = stage_->optimisations();
+    for (const Input& input : waiting) {
+      const bool keyframe = std::holds_alternative<stereo_fabmap_slam::KeyframeConstPtr>(input);
+      seen += keyframe ? 1 : 0;
+      try {
+        changed = Apply(input, !keyframe || seen == keyframes, &stamp) || changed;
+      } catch (const std::exception& error) {
+        NODELET_WARN_THROTTLE(5, "input skipped: %s", error.what());
+      }
+    }
+    for (const std::string& refused : stage_->TakeRefusedEdges())
+      NODELET_WARN("%s", refused.c_str());
+    if (stage_->optimisations() > optimisations) {
+      const backend::PoseGraphSummary& summary = stage_->last_optimisation();
+      NODELET_INFO("pose graph: %zu of %zu keyframes optimised (%s) in %d iterations",
+                   summary.moved_keyframes, stage_->pose_graph().size(),
+                   summary.local ? "near loops that agree with the map" : "whole graph",
+                   summary.iterations);
+    }
+    {
+      std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
+      map_to_odom_ = stage_->MapToOdom();
+    }
+    if (!changed) continue;
+    stereo_fabmap_slam::MapGraph message = ros_conversions::ToMapGraphMessage(*stage_);
+    message.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    message.header.frame_id = map_frame_;
+    graph_publisher_.publish(message);
   }
-  wake_.notify_all();
-  if (worker_.joinable()) worker_.join();
 }
 
-void BackendNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(keyframe);
+bool BackendNodelet::Apply(const Input& input, bool optimise, ros::Time* stamp) {
+  if (const auto* keyframe = std::get_if<stereo_fabmap_slam::KeyframeConstPtr>(&input)) {
+    const stereo_fabmap_slam::Keyframe& message = **keyframe;
+    // A Backend (re)started while the tracker runs: say what this map does not have.
+    if (stage_->empty() && !stage_->camera() && message.id > 0 && stage_->loaded_below() == 0) {
+      NODELET_WARN(
+          "first keyframe received is %lu: the keyframes before it are not in this "
+          "Backend's map (restarted while the tracker ran?); optimising from here, "
+          "map -> odom starts at identity",
+          static_cast<unsigned long>(message.id));
+    }
+    const pipeline::MappedKeyframe mapped =
+        stage_->AddKeyframe(ros_conversions::FromKeyframeMessage(message),
+                            ros_conversions::CameraOfKeyframe(message), optimise);
+    stereo_fabmap_slam::KeyframeUpdate update = ros_conversions::ToMappedKeyframeMessage(mapped);
+    update.header = message.header;
+    update_publisher_.publish(update);
+    *stamp = message.header.stamp;
+    return true;
   }
-  wake_.notify_one();
-}
-
-void BackendNodelet::OnLoopEdge(const stereo_fabmap_slam::LoopEdgeConstPtr& loop) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    loop_queue_.push_back({ros_conversions::FromLoopEdgeMessage(*loop),
-                           loop->relocalization ? backend::PoseGraphEdgeType::kRelocalization
-                                                : backend::PoseGraphEdgeType::kLoop});
+  if (const auto* place = std::get_if<stereo_fabmap_slam::PlaceResultConstPtr>(&input)) {
+    const pipeline::PlaceResult result = ros_conversions::FromPlaceResultMessage(**place);
+    stage_->ApplyLoopDetection(result.keyframe_id, result.detection.loop);
+    return true;
   }
-  wake_.notify_one();
-}
-
-void BackendNodelet::OnMapLoaded(const stereo_fabmap_slam::MapLoadedConstPtr& message) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    map_to_load_ = message->path;
+  if (const auto* edge = std::get_if<stereo_fabmap_slam::LoopEdgeConstPtr>(&input)) {
+    stage_->AddEdge(ros_conversions::FromLoopEdgeMessage(**edge),
+                    backend::PoseGraphEdgeType::kRelocalization);
+    return true;
   }
-  wake_.notify_one();
-}
-
-void BackendNodelet::OnMode(const std_msgs::StringConstPtr& message) {
-  const bool localization = message->data == "localization";
-  // Back to mapping: the keyframes of the localization time were not added, and a loss among
-  // them is unknown here, so the next keyframe starts a new piece of odometry.
-  if (localization_ && !localization) mapping_resumed_ = true;
-  localization_ = localization;
-}
-
-void BackendNodelet::OnCorrection(const geometry_msgs::TransformStampedConstPtr& message) {
-  if (!localization_) return;  // mapping: the pose graph owns map -> odom
-  std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
-  map_to_odom_ = ros_conversions::FromTransformMessage(message->transform);
+  if (const auto* load = std::get_if<LoadMap>(&input)) {
+    // The LoopDetector checked the file; the graph is rebuilt from the same file.
+    try {
+      stage_->Load(map::LoadMapFile(load->path));
+      NODELET_INFO("pose graph of %s: %zu keyframes", load->path.c_str(),
+                   stage_->pose_graph().size());
+    } catch (const std::exception& error) {
+      NODELET_ERROR("map %s not loaded into the pose graph: %s", load->path.c_str(), error.what());
+    }
+    return true;
+  }
+  if (const auto* mode = std::get_if<pipeline::SlamMode>(&input)) {
+    stage_->SetMode(*mode);
+    return false;
+  }
+  stage_->SetLocalizationCorrection(std::get<Correction>(input).T_map_odom);
+  return false;
 }
 
 void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
@@ -180,133 +252,6 @@ void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
   transform.header.frame_id = map_frame_;
   transform.child_frame_id = odom_frame_;
   tf_broadcaster_->sendTransform(transform);
-}
-
-void BackendNodelet::Work() {
-  std::unique_ptr<backend::LocalBundleAdjuster> adjuster;
-  backend::PoseGraph graph(pose_graph_options_);
-  std::deque<Edge> pending_loops;    // their keyframes have not arrived yet
-  bool next_starts_new_map = false;  // after a load: this run's odometry is a new piece
-  // Keyframes below this id are a loaded map's: this run's bundle adjustment never moves them,
-  // and a keyframe of this run with such an id was made before the load.
-  std::int64_t loaded_below = 0;
-  while (true) {
-    std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
-    std::optional<std::string> load;
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] {
-        return stopping_ || !queue_.empty() || !loop_queue_.empty() || map_to_load_;
-      });
-      if (stopping_) return;
-      waiting.swap(queue_);
-      pending_loops.insert(pending_loops.end(), loop_queue_.begin(), loop_queue_.end());
-      loop_queue_.clear();
-      load.swap(map_to_load_);
-    }
-    if (load) {
-      // The LoopDetector checked the file; the graph is rebuilt from the same file.
-      try {
-        const map::SavedMap saved = map::LoadMapFile(*load);
-        graph = pipeline::LoopClosing::RestorePoseGraph(saved, pose_graph_options_);
-        pending_loops.clear();
-        next_starts_new_map = true;
-        adjuster.reset();  // this run's window, with ids the map may use too, starts afresh
-        for (const map::SavedKeyframe& keyframe : saved.keyframes) {
-          loaded_below = std::max(loaded_below, keyframe.keyframe.id + 1);
-        }
-        NODELET_INFO("pose graph of %s: %zu keyframes", load->c_str(), graph.size());
-      } catch (const std::exception& error) {
-        NODELET_ERROR("map %s not loaded into the pose graph: %s", load->c_str(), error.what());
-      }
-    }
-    if (waiting.size() > 1) {
-      NODELET_WARN_THROTTLE(5,
-                            "bundle adjustment falls behind: %zu keyframes added in one "
-                            "optimisation",
-                            waiting.size());
-    }
-    // Every keyframe enters the map; only the newest is followed by an optimisation, whose
-    // window covers the others.
-    ros::Time stamp;
-    while (!waiting.empty()) {
-      const stereo_fabmap_slam::KeyframeConstPtr message = waiting.front();
-      waiting.pop_front();
-      const bool optimise = waiting.empty();
-      try {
-        if (!adjuster) {
-          adjuster = std::make_unique<backend::LocalBundleAdjuster>(
-              options_, ros_conversions::CameraOfKeyframe(*message));
-          // A Backend (re)started while the tracker runs: say what this map does not have.
-          if (message->id > 0 && loaded_below == 0) {
-            NODELET_WARN(
-                "first keyframe received is %lu: the keyframes before it are not in "
-                "this Backend's map (restarted while the tracker ran?); optimising "
-                "from here, map -> odom starts at identity",
-                static_cast<unsigned long>(message->id));
-          }
-        }
-        if (static_cast<std::int64_t>(message->id) < loaded_below) continue;  // before a load
-        const map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
-        const map::KeyframeUpdate update = adjuster->AddKeyframe(keyframe, optimise);
-        // Keyframes made before a map was loaded (ids below the map's) stay out of its graph.
-        if (mapping_resumed_.exchange(false)) next_starts_new_map = true;
-        if (!localization_ && keyframe.id > graph.last_id()) {
-          graph.AddKeyframe(keyframe.id, keyframe.T_world_camera,
-                            keyframe.starts_new_map || next_starts_new_map);
-          next_starts_new_map = false;
-        }
-        for (const auto& [id, pose] : update.keyframe_poses) {
-          if (id >= loaded_below && graph.Contains(id)) graph.UpdateOdometryPose(id, pose);
-        }
-        stamp = message->header.stamp;
-        if (!optimise) continue;
-        stereo_fabmap_slam::KeyframeUpdate update_message =
-            ros_conversions::ToKeyframeUpdateMessage(update);
-        update_message.header = message->header;
-        update_publisher_.publish(update_message);
-      } catch (const std::exception& error) {
-        NODELET_WARN_THROTTLE(5, "keyframe %lu skipped: %s",
-                              static_cast<unsigned long>(message->id), error.what());
-      }
-    }
-    if (AddReadyLoops(&graph, &pending_loops)) {
-      const backend::PoseGraphSummary summary = graph.Optimize();
-      NODELET_INFO("pose graph: %zu of %zu keyframes optimised (%s) in %d iterations",
-                   summary.moved_keyframes, graph.size(),
-                   summary.local ? "near loops that agree with the map" : "whole graph",
-                   summary.iterations);
-    }
-    if (!localization_ && graph.size() > 0) {
-      std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
-      map_to_odom_ = graph.MapToOdom();
-    }
-    if (!stamp.isZero() || graph.size() > 0) {
-      stereo_fabmap_slam::MapGraph message = ros_conversions::ToMapGraphMessage(graph);
-      message.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
-      message.header.frame_id = map_frame_;
-      graph_publisher_.publish(message);
-    }
-  }
-}
-
-bool BackendNodelet::AddReadyLoops(backend::PoseGraph* graph, std::deque<Edge>* loops) {
-  bool added = false;
-  for (auto it = loops->begin(); it != loops->end();) {
-    if (!graph->Contains(it->edge.query_id) || !graph->Contains(it->edge.match_id)) {
-      ++it;
-      continue;
-    }
-    try {
-      graph->AddLoop(it->edge, it->type);
-      added = true;
-    } catch (const std::exception& error) {
-      NODELET_WARN("loop edge %ld -> %ld ignored: %s", static_cast<long>(it->edge.query_id),
-                   static_cast<long>(it->edge.match_id), error.what());
-    }
-    it = loops->erase(it);
-  }
-  return added;
 }
 
 }  // namespace stereo_fabmap_slam

@@ -1,14 +1,12 @@
-// LoopDetector: keyframes in, verified loop edges out, the detect_loop service, and the
-// relocalize_frame service the StereoTracker calls (after a tracking loss, and for the user's
-// relocalize). It keeps the map's keyframes, so it also offers save_map, load_map (and
-// ~map_file at start) and set_mode (~mode), announcing a loaded map (map_loaded) and the mode
-// (mode) to the other nodelets. Everything algorithmic is place_recognition::LoopDetector,
-// relocalization::Relocalizer and the map file; this file converts, queues and publishes. Map
-// poses and which keyframes form one map come from the Backend's map_graph.
-#include <chrono>
+// LoopDetector: the place stage (pipeline::PlaceStage) in the nodelet graph. Keyframes and the
+// Backend's answers to them (keyframe_updates) in; a place result per mapped keyframe
+// (place_results) and relocalization edges out; the map's snapshot from map_graph. Services:
+// detect_loop, relocalize_frame (the StereoTracker's), save_map, load_map (and ~map_file at
+// start), set_mode (and ~mode), announced as map_loaded and mode. The stage decides; this file
+// pairs each keyframe with its answer, converts, calls and publishes. A map file or mode it
+// refuses at start leaves it running with an empty map in mapping mode, and says so.
 #include <condition_variable>
 #include <deque>
-#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -21,169 +19,114 @@
 #include <ros/ros.h>
 #include <std_msgs/String.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
-#include <stereo_fabmap_slam/KeyframeUpdate.h>
 #include <stereo_fabmap_slam/MapFile.h>
-#include <stereo_fabmap_slam/MapGraph.h>
 #include <stereo_fabmap_slam/MapLoaded.h>
-#include <stereo_fabmap_slam/RelocalizeFrame.h>
 #include <stereo_fabmap_slam/SetMode.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "parameter_reader.h"
+#include "place_wiring.h"
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/backend/pose_graph.h"
+#include "stage_conversions.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
-#include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/map/map_file.h"
-#include "stereo_fabmap_slam/pipeline/loop_closing.h"
-#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
-#include "stereo_fabmap_slam/relocalization/relocalizer.h"
+#include "stereo_fabmap_slam/pipeline/place_stage.h"
+#include "tracker_wiring.h"
 
 namespace stereo_fabmap_slam {
 
 class LoopDetectorNodelet : public nodelet::Nodelet {
  public:
-  ~LoopDetectorNodelet() override;
+  ~LoopDetectorNodelet() override {
+    if (relocalize_spinner_) relocalize_spinner_->stop();
+    relocalize_service_.shutdown();  // before its queue
+    pairing_.Stop();
+    if (worker_.joinable()) worker_.join();
+  }
 
  private:
   void onInit() override;
-  void OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe);
+  void Work();
+  // The stage for the map's camera (made once: the first keyframe's or a loaded map's). Call
+  // with mutex_.
+  pipeline::PlaceStage& Stage(const geometry::StereoCamera& camera);
+  // Loads a map file in place of the map and announces it; throws (the map is kept) for a file
+  // that is damaged or does not fit. Call with mutex_.
+  std::size_t LoadMap(const std::string& path);
+  bool SetMode(const std::string& name);  // announces it; false for an unknown name
   bool OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
                     stereo_fabmap_slam::DetectLoop::Response& response);
   bool OnRelocalizeFrame(stereo_fabmap_slam::RelocalizeFrame::Request& request,
                          stereo_fabmap_slam::RelocalizeFrame::Response& response);
-  void OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph);
-  void OnKeyframeUpdate(const stereo_fabmap_slam::KeyframeUpdateConstPtr& update);
   bool OnSaveMap(stereo_fabmap_slam::MapFile::Request& request,
                  stereo_fabmap_slam::MapFile::Response& response);
   bool OnLoadMap(stereo_fabmap_slam::MapFile::Request& request,
                  stereo_fabmap_slam::MapFile::Response& response);
   bool OnSetMode(stereo_fabmap_slam::SetMode::Request& request,
-                 stereo_fabmap_slam::SetMode::Response& response);
-  // Loads a map file in place of the map and announces it; throws io::InputError (the map is
-  // kept) for a file that is damaged or does not fit. Call with mutex_.
-  std::size_t LoadMap(const std::string& path);
-  // The detector for a camera (made once; the first keyframe's or a loaded map's). Call with
-  // mutex_.
-  void MakeDetector(const geometry::StereoCamera& camera);
-  void Work();
-  // The detector needs the camera, which arrives with the first keyframe. Call with mutex_.
-  place_recognition::LoopDetector& Detector(const stereo_fabmap_slam::Keyframe& message);
+                 stereo_fabmap_slam::SetMode::Response& response) {
+    response.success = SetMode(request.mode);
+    response.message = response.success
+                           ? "mode " + request.mode
+                           : "unknown mode '" + request.mode + "' (mapping, localization)";
+    return true;
+  }
 
-  place_recognition::PlaceRecognitionOptions place_options_;
-  place_recognition::LoopDetectorOptions detector_options_;
-  features::DescriptorKind descriptor_;
-  std::optional<place_recognition::LoopDetector> detector_;
-  relocalization::RelocalizerOptions relocalizer_options_;
-  std::optional<relocalization::Relocalizer> relocalizer_;  // made with the detector
-  std::optional<geometry::StereoCamera> camera_;            // the map's camera
-  backend::PoseGraphOptions pose_graph_options_;  // to check a map's graph before loading it
-  pipeline::SlamMode mode_ = pipeline::SlamMode::kMapping;
-  // The next keyframe added starts a new piece of odometry: after a load (the map's odometry is
-  // another run's) and after localization mode (its keyframes were not added, a loss among
-  // them is unknown here).
-  bool next_starts_new_map_ = false;
-  // Keyframes below this id belong to a loaded map: this run's bundle adjustment never moves
-  // them, and an update or keyframe of this run with such an id is from before the load.
-  std::int64_t loaded_below_ = 0;
-
-  // From the latest map_graph: map poses, and the component (keyframes joined by odometry, loop
-  // and relocalization edges) of each keyframe; the map is the first keyframe's component.
-  struct MapView {
-    std::map<std::int64_t, Eigen::Isometry3d> poses;
-    std::map<std::int64_t, std::int64_t> component;  // keyframe -> its component's first id
-    std::int64_t first = -1;
-    Eigen::Isometry3d map_to_odom = Eigen::Isometry3d::Identity();
-    std::vector<map::SavedEdge> edges;  // loop and relocalization edges
-    bool InMap(std::int64_t id) const {
-      const auto it = component.find(id);
-      return first >= 0 && it != component.end() && it->second == component.at(first);
-    }
-  };
-  // Builds a view from keyframe ids with map poses, the joins between them (odometry, loop and
-  // relocalization edges) and the loop and relocalization edges to save.
-  MapView MakeMapView(const std::vector<std::pair<std::int64_t, Eigen::Isometry3d>>& poses,
-                      const std::vector<std::pair<std::int64_t, std::int64_t>>& joins,
-                      std::vector<map::SavedEdge> edges,
-                      const Eigen::Isometry3d& map_to_odom) const;
-  std::mutex map_view_mutex_;
-  MapView map_view_;
-
-  ros::Subscriber keyframe_subscriber_, graph_subscriber_, update_subscriber_;
-  ros::Publisher loop_publisher_, map_loaded_publisher_, mode_publisher_;
+  ros_wiring::PlaceParameters parameters_;
+  std::mutex mutex_;  // the stage: the worker and the services share it
+  std::optional<pipeline::PlaceStage> stage_;
+  std::optional<geometry::StereoCamera> camera_;  // the map's
+  std::shared_ptr<const pipeline::MapSnapshot> map_ = std::make_shared<pipeline::MapSnapshot>();
+  std::mutex map_mutex_;  // map_
+  ros_wiring::KeyframePairing pairing_;
+  std::thread worker_;
+  ros::Subscriber keyframe_subscriber_, update_subscriber_, graph_subscriber_;
+  ros::Publisher place_publisher_, edge_publisher_, loaded_publisher_, mode_publisher_;
   // relocalize_frame runs on a queue and thread of its own: the StereoTracker calls it from its
-  // image callback, which must not wait for a free thread of the manager's pool. The queue
-  // outlives the server advertised on it: a server destroyed after its queue locks the queue's
-  // freed mutex (boost::lock_error when the manager unloads the nodelet).
+  // tracking thread, which must not wait for a free thread of the manager's pool. The queue
+  // outlives the server advertised on it.
   ros::CallbackQueue relocalize_queue_;
   std::unique_ptr<ros::AsyncSpinner> relocalize_spinner_;
   ros::ServiceServer detect_service_, relocalize_service_, save_service_, load_service_,
       mode_service_;
-
-  std::mutex mutex_;  // the detector: the worker and the service share it
-  std::mutex queue_mutex_;
-  std::condition_variable wake_;
-  // Keyframes not yet detected. Never dropped: every keyframe must become a place. The worker
-  // takes all that waited in one pass, so the queue holds what arrives during one detection.
-  std::deque<stereo_fabmap_slam::KeyframeConstPtr> queue_;
-  bool stopping_ = false;
-  std::thread worker_;
 };
 
 void LoopDetectorNodelet::onInit() {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
-  try {
-    const features::FeatureOptions odometry_features =
-        ros_parameters::ReadModuleOptions(private_node, features::FeatureOptions());
-    descriptor_ = features::CreateDescriptor(odometry_features);
-    std::string fabmap_config;
-    if (!private_node.getParam("fabmap_config", fabmap_config)) {
-      throw std::runtime_error("set ~fabmap_config (e.g. config/fabmap.yaml)");
-    }
-    place_options_ =
-        place_recognition::LoadPlaceRecognitionOptions(fabmap_config, odometry_features);
-    detector_options_ = ros_parameters::ReadModuleOptions(private_node, detector_options_);
-    relocalizer_options_ = ros_parameters::ReadModuleOptions(private_node, relocalizer_options_);
-    pose_graph_options_ = ros_parameters::ReadModuleOptions(private_node, pose_graph_options_);
-    // Load the vocabulary once now, so that a missing or damaged file stops start-up.
-    place_recognition::Vocabulary::Load(place_options_.vocabulary_directory + "/vocabulary.bin");
+  try {  // before any ROS object exists: a throw unloads cleanly
+    parameters_ = ros_wiring::ReadPlaceParameters(private_node);
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
-  NODELET_INFO_STREAM("vocabulary " << place_options_.vocabulary_directory
+  NODELET_INFO_STREAM("vocabulary " << parameters_.place.vocabulary_directory
                                     << "; options in force:\n"
-                                    << ros_parameters::PrintedOptions(detector_options_)
-                                    << ros_parameters::PrintedOptions(relocalizer_options_));
+                                    << parameters_.printed);
   ros::NodeHandle& node = getNodeHandle();
-  loop_publisher_ = node.advertise<stereo_fabmap_slam::LoopEdge>("loop_edges", 100);
-  map_loaded_publisher_ = node.advertise<stereo_fabmap_slam::MapLoaded>("map_loaded", 1, true);
+  place_publisher_ = node.advertise<stereo_fabmap_slam::PlaceResult>("place_results", 100);
+  edge_publisher_ = node.advertise<stereo_fabmap_slam::LoopEdge>("relocalization_edges", 100);
+  loaded_publisher_ = node.advertise<stereo_fabmap_slam::MapLoaded>("map_loaded", 1, true);
   mode_publisher_ = node.advertise<std_msgs::String>("mode", 1, true);
+  // A refused ~mode or ~map_file leaves the node running, empty and mapping: the odometry goes
+  // on, and load_map or set_mode can put it right without a restart.
+  if (!SetMode(parameters_.mode)) {
+    NODELET_ERROR("~mode '%s' is not a mode (mapping, localization): mapping",
+                  parameters_.mode.c_str());
+    SetMode("mapping");
+  }
+  if (!parameters_.map_file.empty()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    try {
+      NODELET_INFO("map %s loaded: %zu keyframes", parameters_.map_file.c_str(),
+                   LoadMap(parameters_.map_file));
+    } catch (const std::exception& error) {
+      NODELET_ERROR("~map_file refused: %s; running with an empty map in mapping mode",
+                    error.what());
+      SetMode("mapping");
+    }
+  }
   save_service_ = node.advertiseService("save_map", &LoopDetectorNodelet::OnSaveMap, this);
   load_service_ = node.advertiseService("load_map", &LoopDetectorNodelet::OnLoadMap, this);
   mode_service_ = node.advertiseService("set_mode", &LoopDetectorNodelet::OnSetMode, this);
-  update_subscriber_ =
-      node.subscribe("keyframe_updates", 100, &LoopDetectorNodelet::OnKeyframeUpdate, this);
-  {
-    stereo_fabmap_slam::SetMode::Request mode_request;
-    stereo_fabmap_slam::SetMode::Response mode_response;
-    mode_request.mode = private_node.param<std::string>("mode", "mapping");
-    OnSetMode(mode_request, mode_response);
-    if (!mode_response.success) {
-      NODELET_FATAL_STREAM("~mode: " << mode_response.message);
-      throw std::runtime_error(mode_response.message);
-    }
-  }
-  const std::string map_file = private_node.param<std::string>("map_file", "");
-  if (!map_file.empty()) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    try {
-      NODELET_INFO("map %s loaded: %zu keyframes", map_file.c_str(), LoadMap(map_file));
-    } catch (const std::exception& error) {
-      NODELET_FATAL_STREAM("~map_file: " << error.what());
-      throw;
-    }
-  }
   detect_service_ = node.advertiseService("detect_loop", &LoopDetectorNodelet::OnDetectLoop, this);
   ros::NodeHandle relocalize_node(node);
   relocalize_node.setCallbackQueue(&relocalize_queue_);
@@ -191,155 +134,110 @@ void LoopDetectorNodelet::onInit() {
       "relocalize_frame", &LoopDetectorNodelet::OnRelocalizeFrame, this);
   relocalize_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &relocalize_queue_);
   relocalize_spinner_->start();
-  graph_subscriber_ = node.subscribe("map_graph", 1, &LoopDetectorNodelet::OnMapGraph, this);
+  graph_subscriber_ = node.subscribe<stereo_fabmap_slam::MapGraph>(
+      "map_graph", 1, [this](const stereo_fabmap_slam::MapGraphConstPtr& graph) {
+        auto map =
+            std::make_shared<pipeline::MapSnapshot>(ros_conversions::FromMapGraphMessage(*graph));
+        std::lock_guard<std::mutex> lock(map_mutex_);
+        map_ = std::move(map);
+      });
   worker_ = std::thread(&LoopDetectorNodelet::Work, this);
-  keyframe_subscriber_ = node.subscribe("keyframes", 100, &LoopDetectorNodelet::OnKeyframe, this);
-}
-
-LoopDetectorNodelet::~LoopDetectorNodelet() {
-  if (relocalize_spinner_) relocalize_spinner_->stop();
-  relocalize_service_.shutdown();  // before its queue
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-  if (worker_.joinable()) worker_.join();
-}
-
-void LoopDetectorNodelet::MakeDetector(const geometry::StereoCamera& camera) {
-  if (detector_) return;
-  detector_.emplace(pipeline::LoopClosing::LoadDetector(
-      place_options_, detector_options_, camera, descriptor_.norm, descriptor_.max_match_distance));
-  relocalizer_.emplace(relocalizer_options_, camera, descriptor_.norm,
-                       descriptor_.max_match_distance);
-  camera_ = camera;
-}
-
-place_recognition::LoopDetector& LoopDetectorNodelet::Detector(
-    const stereo_fabmap_slam::Keyframe& message) {
-  const geometry::StereoCamera camera = ros_conversions::CameraOfKeyframe(message);
-  MakeDetector(camera);
-  if (camera.size != camera_->size || std::abs(camera.fx - camera_->fx) > 1e-6 * camera_->fx ||
-      std::abs(camera.baseline - camera_->baseline) > 1e-6 * camera_->baseline) {
-    throw std::invalid_argument(
-        "the keyframe's camera differs from the map's (a map of another "
-        "camera was loaded?)");
-  }
-  return *detector_;
-}
-
-LoopDetectorNodelet::MapView LoopDetectorNodelet::MakeMapView(
-    const std::vector<std::pair<std::int64_t, Eigen::Isometry3d>>& poses,
-    const std::vector<std::pair<std::int64_t, std::int64_t>>& joins,
-    std::vector<map::SavedEdge> edges, const Eigen::Isometry3d& map_to_odom) const {
-  MapView view;
-  // Union-find over the joins; each component is named by its smallest id.
-  std::map<std::int64_t, std::int64_t> parent;
-  const std::function<std::int64_t(std::int64_t)> root = [&](std::int64_t id) {
-    while (parent[id] != id) id = parent[id] = parent[parent[id]];
-    return id;
-  };
-  for (const auto& [id, pose] : poses) {
-    parent[id] = id;
-    view.poses[id] = pose;
-  }
-  for (const auto& [a, b] : joins) {
-    if (parent.count(a) == 0 || parent.count(b) == 0) continue;
-    const std::int64_t ra = root(a), rb = root(b);
-    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
-  }
-  for (const auto& entry : parent) view.component[entry.first] = root(entry.first);
-  if (!view.poses.empty()) view.first = view.poses.begin()->first;
-  view.map_to_odom = map_to_odom;
-  view.edges = std::move(edges);
-  return view;
-}
-
-void LoopDetectorNodelet::OnMapGraph(const stereo_fabmap_slam::MapGraphConstPtr& graph) {
-  std::vector<std::pair<std::int64_t, Eigen::Isometry3d>> poses;
-  for (std::size_t i = 0; i < graph->keyframe_ids.size() && i < graph->keyframe_poses.size(); ++i) {
-    poses.emplace_back(static_cast<std::int64_t>(graph->keyframe_ids[i]),
-                       ros_conversions::FromPoseMessage(graph->keyframe_poses[i]));
-  }
-  std::vector<std::pair<std::int64_t, std::int64_t>> joins;
-  std::vector<map::SavedEdge> edges;
-  for (const stereo_fabmap_slam::MapGraphEdge& edge : graph->edges) {
-    const auto a = static_cast<std::int64_t>(edge.from_id),
-               b = static_cast<std::int64_t>(edge.to_id);
-    joins.emplace_back(a, b);
-    if (edge.type == stereo_fabmap_slam::MapGraphEdge::ODOMETRY) continue;
-    map::SavedEdge saved;
-    saved.edge.match_id = a;
-    saved.edge.query_id = b;
-    saved.edge.T_match_query = ros_conversions::FromPoseMessage(edge.T_from_to);
-    saved.relocalization = edge.type == stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION;
-    // Every edge of a kind has the configured uncertainty (loop_detection, relocalization).
-    saved.edge.information =
-        saved.relocalization
-            ? geometry::DiagonalPoseInformation(relocalizer_options_.translation_sigma,
-                                                relocalizer_options_.rotation_sigma_deg)
-            : geometry::DiagonalPoseInformation(detector_options_.translation_sigma,
-                                                detector_options_.rotation_sigma_deg);
-    edges.push_back(saved);
-  }
-  MapView view = MakeMapView(poses, joins, std::move(edges),
-                             ros_conversions::FromTransformMessage(graph->map_to_odom));
-  std::lock_guard<std::mutex> lock(map_view_mutex_);
-  map_view_ = std::move(view);
-}
-
-void LoopDetectorNodelet::OnKeyframe(const stereo_fabmap_slam::KeyframeConstPtr& keyframe) {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    queue_.push_back(keyframe);
-  }
-  wake_.notify_one();
+  keyframe_subscriber_ = node.subscribe<stereo_fabmap_slam::Keyframe>(
+      "keyframes", 100,
+      [this](const stereo_fabmap_slam::KeyframeConstPtr& m) { pairing_.AddKeyframe(m); });
+  update_subscriber_ = node.subscribe<stereo_fabmap_slam::KeyframeUpdate>(
+      "keyframe_updates", 100,
+      [this](const stereo_fabmap_slam::KeyframeUpdateConstPtr& m) { pairing_.AddUpdate(m); });
 }
 
 void LoopDetectorNodelet::Work() {
-  while (true) {
-    std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
-      if (stopping_) return;
-      waiting.swap(queue_);
+  while (std::optional<ros_wiring::KeyframePairing::Pair> pair = pairing_.Take()) {
+    if (!pair->keyframe) {
+      NODELET_WARN(
+          "keyframe %lu joined the map, but its keyframe message never arrived "
+          "(restarted while the tracker ran?): it is no place",
+          static_cast<unsigned long>(pair->update->keyframe_id));
+      continue;
     }
-    for (const stereo_fabmap_slam::KeyframeConstPtr& message : waiting) {
-      try {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (mode_ == pipeline::SlamMode::kLocalization) continue;  // the map is not extended
-        if (static_cast<std::int64_t>(message->id) < loaded_below_) continue;  // before a load
-        const bool first_keyframe = !detector_;
-        place_recognition::LoopDetector& detector = Detector(*message);
-        // A LoopDetector (re)started while the tracker runs: say what its places do not cover.
-        if (first_keyframe && message->id > 0 && loaded_below_ == 0) {
-          NODELET_WARN(
-              "first keyframe received is %lu: the keyframes before it are not places of this "
-              "LoopDetector (restarted while the tracker ran?); loops and relocalizations find "
-              "keyframes from here on",
-              static_cast<unsigned long>(message->id));
-        }
-        map::Keyframe keyframe = ros_conversions::FromKeyframeMessage(*message);
-        keyframe.starts_new_map = keyframe.starts_new_map || next_starts_new_map_;
-        next_starts_new_map_ = false;
-        const place_recognition::LoopDetection detection = detector.Process(std::move(keyframe));
-        if (detection.loop) {
-          stereo_fabmap_slam::LoopEdge edge = ros_conversions::ToLoopEdgeMessage(*detection.loop);
-          edge.header = message->header;
-          loop_publisher_.publish(edge);
-          NODELET_INFO("loop: keyframe %ld -> %ld, %d inliers, p = %.2f",
-                       static_cast<long>(detection.loop->query_id),
-                       static_cast<long>(detection.loop->match_id), detection.loop->inliers,
-                       detection.loop->probability);
-        }
-      } catch (const std::exception& error) {
-        NODELET_WARN_THROTTLE(5, "keyframe %lu not detected: %s",
-                              static_cast<unsigned long>(message->id), error.what());
+    try {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const bool first = !stage_;
+      pipeline::PlaceStage& stage = Stage(ros_conversions::CameraOfKeyframe(*pair->keyframe));
+      // A LoopDetector (re)started while the tracker runs: say what its places do not cover.
+      if (first && pair->keyframe->id > 0) {
+        NODELET_WARN(
+            "first keyframe received is %lu: the keyframes before it are not places "
+            "of this LoopDetector (restarted while the tracker ran?)",
+            static_cast<unsigned long>(pair->keyframe->id));
       }
+      const pipeline::MappedKeyframe mapped =
+          ros_conversions::FromMappedKeyframeMessage(*pair->update);
+      stage.AddKeyframe(ros_conversions::FromKeyframeMessage(*pair->keyframe), mapped);
+      if (!mapped.in_map_graph) continue;
+      const pipeline::PlaceResult result = stage.DetectLoop(mapped.keyframe_id);
+      stereo_fabmap_slam::PlaceResult message = ros_conversions::ToPlaceResultMessage(result);
+      message.header.frame_id = pair->keyframe->header.frame_id;
+      place_publisher_.publish(message);
+      if (const auto& loop = result.detection.loop) {
+        NODELET_INFO("loop: keyframe %ld -> %ld, %d inliers, p = %.2f",
+                     static_cast<long>(loop->query_id), static_cast<long>(loop->match_id),
+                     loop->inliers, loop->probability);
+      }
+    } catch (const std::exception& error) {
+      NODELET_WARN_THROTTLE(5, "keyframe %lu not detected: %s",
+                            static_cast<unsigned long>(pair->keyframe->id), error.what());
     }
   }
+}
+
+pipeline::PlaceStage& LoopDetectorNodelet::Stage(const geometry::StereoCamera& camera) {
+  if (!stage_) {
+    stage_.emplace(pipeline::PlaceStage::LoadDetector(parameters_.place, parameters_.detection,
+                                                      camera, parameters_.descriptor.norm,
+                                                      parameters_.descriptor.max_match_distance),
+                   parameters_.relocalizer, ros_wiring::SteadyMilliseconds);
+    camera_ = camera;
+  }
+  return *stage_;
+}
+
+std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
+  const map::SavedMap saved = map::LoadMapFile(path);
+  // No keyframe yet: the map brings its camera (the Backend refuses keyframes of another).
+  const bool fresh = !stage_;
+  pipeline::LoadedMap loaded;
+  try {
+    loaded = Stage(saved.camera).Load(saved, *camera_);
+  } catch (...) {
+    if (fresh) {  // the next keyframe brings the camera after all
+      stage_.reset();
+      camera_.reset();
+    }
+    throw;
+  }
+  // Until the Backend publishes its graph rebuilt from the same file, the map is the file's.
+  auto map = std::make_shared<pipeline::MapSnapshot>(ros_wiring::SnapshotOfSavedMap(saved));
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    map_ = std::move(map);
+  }
+  stereo_fabmap_slam::MapLoaded message;
+  message.header.stamp = ros::Time::now();
+  message.path = path;
+  message.keyframes = loaded.keyframes;
+  message.next_keyframe_id = static_cast<std::uint64_t>(loaded.next_keyframe_id);
+  message.next_point_id = static_cast<std::uint64_t>(loaded.next_point_id);
+  loaded_publisher_.publish(message);
+  return loaded.keyframes;
+}
+
+bool LoopDetectorNodelet::SetMode(const std::string& name) {
+  if (!pipeline::ParseSlamMode(name)) return false;
+  std_msgs::String message;
+  message.data = name;
+  mode_publisher_.publish(message);
+  NODELET_INFO("mode %s", name.c_str());
+  return true;
 }
 
 bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
@@ -348,44 +246,26 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
   try {
     place_recognition::LoopDetection detection;
     if (request.keyframe_id >= 0) {
-      if (!detector_ || !detector_->database().Contains(request.keyframe_id)) {
+      if (!stage_ || !stage_->detector().database().Contains(request.keyframe_id)) {
         response.message = "keyframe " + std::to_string(request.keyframe_id) + " is not in the map";
         return true;
       }
-      detection = detector_->DetectStored(request.keyframe_id);
+      detection = stage_->DetectLoop(request.keyframe_id).detection;
     } else {
       if (request.keyframe.place_descriptors.empty() || request.keyframe.u.empty()) {
         response.message = "the keyframe has no descriptors";
         return true;
       }
-      if (request.add_to_map && detector_ && detector_->database().Contains(request.keyframe.id)) {
+      pipeline::PlaceStage& stage = Stage(ros_conversions::CameraOfKeyframe(request.keyframe));
+      if (request.add_to_map && stage.detector().database().Contains(request.keyframe.id)) {
         response.message =
             "keyframe " + std::to_string(request.keyframe.id) + " is in the map already";
         return true;
       }
       detection =
-          Detector(request.keyframe)
-              .Process(ros_conversions::FromKeyframeMessage(request.keyframe), request.add_to_map);
+          stage.Detect(ros_conversions::FromKeyframeMessage(request.keyframe), request.add_to_map);
     }
-    if (detection.places_compared == 0) {
-      response.message = "the map has no place old enough to compare with";
-      response.new_place_probability = 1;
-      response.success = false;
-      return true;
-    }
-    response.success = true;
-    response.new_place_probability = detection.new_place_probability;
-    for (const place_recognition::LoopCandidate& candidate : detection.candidates) {
-      response.candidate_ids.push_back(static_cast<std::uint64_t>(candidate.keyframe_id));
-      response.candidate_probabilities.push_back(candidate.probability);
-      response.candidate_inliers.push_back(candidate.inliers);
-      response.candidate_accepted.push_back(candidate.accepted);
-      response.candidate_reasons.push_back(candidate.reason);
-    }
-    response.loop_found = detection.loop.has_value();
-    if (detection.loop) response.loop = ros_conversions::ToLoopEdgeMessage(*detection.loop);
-    response.message = std::to_string(detection.candidates.size()) + " candidates" +
-                       (detection.loop ? ", loop found" : ", no loop");
+    ros_wiring::FillDetectLoopResponse(detection, &response);
   } catch (const std::exception& error) {
     response.success = false;
     response.message = error.what();
@@ -393,103 +273,55 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
   return true;
 }
 
-void LoopDetectorNodelet::OnKeyframeUpdate(
-    const stereo_fabmap_slam::KeyframeUpdateConstPtr& message) {
-  // The bundle adjustment's poses keep the odometry check of loops and the saved map current.
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!detector_) return;
-  for (std::size_t i = 0; i < message->keyframe_ids.size() && i < message->keyframe_poses.size();
-       ++i) {
-    if (static_cast<std::int64_t>(message->keyframe_ids[i]) < loaded_below_) continue;
-    detector_->UpdatePose(static_cast<std::int64_t>(message->keyframe_ids[i]),
-                          ros_conversions::FromPoseMessage(message->keyframe_poses[i]));
-  }
-}
-
-std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
-  const map::SavedMap saved = map::LoadMapFile(path);
-  std::optional<place_recognition::LoopDetector> fresh;
-  if (!detector_) {
-    // No keyframe yet: the map brings its camera; keyframes of another one are refused later.
-    fresh.emplace(pipeline::LoopClosing::LoadDetector(place_options_, detector_options_,
-                                                      saved.camera, descriptor_.norm,
-                                                      descriptor_.max_match_distance));
-  }
-  const place_recognition::LoopDetector& current = detector_ ? *detector_ : *fresh;
-  pipeline::LoopClosing::CheckFits(saved, current, detector_ ? *camera_ : saved.camera);
-  place_recognition::LoopDetector restored = pipeline::LoopClosing::RestoreDetector(saved, current);
-  // The Backend rebuilds its graph from the same file: a graph that cannot be rebuilt is refused
-  // here, before anything changes.
-  const backend::PoseGraph graph =
-      pipeline::LoopClosing::RestorePoseGraph(saved, pose_graph_options_);
-  MakeDetector(saved.camera);
-  detector_.emplace(std::move(restored));
-  next_starts_new_map_ = true;
-  // Until the Backend publishes its rebuilt graph, the view is the saved map's.
-  std::vector<std::pair<std::int64_t, Eigen::Isometry3d>> poses;
-  std::vector<std::pair<std::int64_t, std::int64_t>> joins;
-  for (std::size_t i = 0; i < saved.keyframes.size(); ++i) {
-    const map::Keyframe& keyframe = saved.keyframes[i].keyframe;
-    poses.emplace_back(keyframe.id, saved.keyframes[i].T_map_camera);
-    if (i > 0 && !keyframe.starts_new_map) {
-      joins.emplace_back(saved.keyframes[i - 1].keyframe.id, keyframe.id);
-    }
-  }
-  for (const map::SavedEdge& edge : saved.edges) {
-    joins.emplace_back(edge.edge.match_id, edge.edge.query_id);
-  }
-  MapView view = MakeMapView(poses, joins, saved.edges, graph.MapToOdom());
+bool LoopDetectorNodelet::OnRelocalizeFrame(
+    stereo_fabmap_slam::RelocalizeFrame::Request& request,
+    stereo_fabmap_slam::RelocalizeFrame::Response& response) {
+  std::shared_ptr<const pipeline::MapSnapshot> map;
   {
-    std::lock_guard<std::mutex> lock(map_view_mutex_);
-    map_view_ = std::move(view);
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    map = map_;
   }
-  stereo_fabmap_slam::MapLoaded message;
-  message.header.stamp = ros::Time::now();
-  message.path = path;
-  message.keyframes = saved.keyframes.size();
-  for (const map::SavedKeyframe& keyframe : saved.keyframes) {
-    message.next_keyframe_id =
-        std::max<std::uint64_t>(message.next_keyframe_id, keyframe.keyframe.id + 1);
-    for (const std::int64_t point : keyframe.keyframe.map_point_ids) {
-      if (point >= 0) {
-        message.next_point_id = std::max<std::uint64_t>(message.next_point_id, point + 1);
-      }
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    if (!stage_ || stage_->empty()) {
+      response.status = "empty map";
+      response.message = "the map is empty";
+      response.keyframe_id = -1;
+      return true;
     }
+    const pipeline::RelocalizationAnswer answer =
+        stage_->Relocalize(ros_conversions::FromRelocalizeFrameRequest(request), *map);
+    response = ros_conversions::ToRelocalizeFrameResponse(answer);
+    if (answer.edge) {
+      stereo_fabmap_slam::LoopEdge edge = response.edge;
+      edge.header = request.frame.header;
+      edge_publisher_.publish(edge);
+      NODELET_INFO("relocalized: keyframe %ld joined to %ld, %d inliers",
+                   static_cast<long>(answer.edge->query_id),
+                   static_cast<long>(answer.edge->match_id), answer.edge->inliers);
+    }
+  } catch (const std::exception& error) {
+    response.success = false;
+    response.status = "error";
+    response.message = error.what();
   }
-  loaded_below_ = static_cast<std::int64_t>(message.next_keyframe_id);
-  map_loaded_publisher_.publish(message);
-  return saved.keyframes.size();
+  return true;
 }
 
 bool LoopDetectorNodelet::OnSaveMap(stereo_fabmap_slam::MapFile::Request& request,
                                     stereo_fabmap_slam::MapFile::Response& response) {
-  MapView view;
+  std::shared_ptr<const pipeline::MapSnapshot> map;
   {
-    std::lock_guard<std::mutex> lock(map_view_mutex_);
-    view = map_view_;
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    map = map_;
   }
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!detector_ || detector_->database().empty()) {
+  if (!stage_ || stage_->empty()) {
     response.message = "the map is empty";
     return true;
   }
   try {
-    map::SavedMap saved;
-    saved.vocabulary_fingerprint = detector_->vocabulary_fingerprint();
-    saved.camera = *camera_;
-    for (const auto& [id, stored] : detector_->database().keyframes()) {
-      const auto pose = view.poses.find(id);
-      saved.keyframes.push_back({stored.keyframe, stored.words,
-                                 pose != view.poses.end()
-                                     ? pose->second
-                                     : view.map_to_odom * stored.keyframe.T_world_camera});
-    }
-    for (const map::SavedEdge& edge : view.edges) {
-      if (detector_->database().Contains(edge.edge.match_id) &&
-          detector_->database().Contains(edge.edge.query_id)) {
-        saved.edges.push_back(edge);
-      }
-    }
+    const map::SavedMap saved = stage_->Save(*map, *camera_);
     map::SaveMapFile(request.path, saved);
     response.success = true;
     response.keyframes = static_cast<std::uint32_t>(saved.keyframes.size());
@@ -512,109 +344,6 @@ bool LoopDetectorNodelet::OnLoadMap(stereo_fabmap_slam::MapFile::Request& reques
   } catch (const std::exception& error) {
     response.message = std::string(error.what()) + "; the map is unchanged";
   }
-  return true;
-}
-
-bool LoopDetectorNodelet::OnSetMode(stereo_fabmap_slam::SetMode::Request& request,
-                                    stereo_fabmap_slam::SetMode::Response& response) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  for (const auto& entry : pipeline::kSlamModeNames) {
-    if (request.mode == entry.name) {
-      if (mode_ == pipeline::SlamMode::kLocalization &&
-          entry.value == pipeline::SlamMode::kMapping) {
-        next_starts_new_map_ = true;
-      }
-      mode_ = entry.value;
-      std_msgs::String message;
-      message.data = entry.name;
-      mode_publisher_.publish(message);
-      response.success = true;
-      response.message = "mode " + request.mode;
-      NODELET_INFO("mode %s", entry.name);
-      return true;
-    }
-  }
-  response.message = "unknown mode '" + request.mode + "' (mapping, localization)";
-  return true;
-}
-
-bool LoopDetectorNodelet::OnRelocalizeFrame(
-    stereo_fabmap_slam::RelocalizeFrame::Request& request,
-    stereo_fabmap_slam::RelocalizeFrame::Response& response) {
-  const auto start = std::chrono::steady_clock::now();
-  MapView view;
-  {
-    std::lock_guard<std::mutex> lock(map_view_mutex_);
-    view = map_view_;
-  }
-  std::lock_guard<std::mutex> lock(mutex_);
-  try {
-    if (!detector_ || detector_->database().empty()) {
-      response.status = "empty map";
-      response.message = "the map is empty";
-      return true;
-    }
-    const bool recover = request.mode == stereo_fabmap_slam::RelocalizeFrame::Request::RECOVER;
-    if (recover && view.InMap(request.reference_keyframe_id)) {
-      response.already_joined = true;
-      response.status = "success";
-      response.message = "the frame's piece of odometry is in the map already";
-      return true;
-    }
-    const map::Keyframe frame = ros_conversions::FromKeyframeMessage(request.frame);
-    const relocalization::Relocalization result =
-        relocalizer_->Relocalize(frame.features, detector_->Words(frame.place_descriptors),
-                                 *detector_, [&](const map::StoredKeyframe& keyframe) {
-                                   return !recover || view.InMap(keyframe.keyframe.id);
-                                 });
-    response.success = result.success();
-    response.status = relocalization::RelocalizationStatusName(result.status);
-    response.message = result.reason;
-    response.matches = result.matches;
-    response.inliers = result.inliers;
-    response.probability = result.probability;
-    if (result.success()) {
-      response.keyframe_id = static_cast<std::uint64_t>(result.keyframe_id);
-      response.T_keyframe_camera = ros_conversions::ToPoseMessage(result.T_keyframe_camera);
-      // The keyframe's map pose from the latest map_graph; a keyframe too new to be in it yet
-      // (the Backend publishes after adjusting it) is placed by its odometry and map -> odom.
-      const auto pose = view.poses.find(result.keyframe_id);
-      const Eigen::Isometry3d T_map_keyframe =
-          pose != view.poses.end()
-              ? pose->second
-              : view.map_to_odom *
-                    detector_->database().Get(result.keyframe_id).keyframe.T_world_camera;
-      response.map_pose_known = pose != view.poses.end() || view.first >= 0;
-      response.T_map_camera =
-          ros_conversions::ToPoseMessage(T_map_keyframe * result.T_keyframe_camera);
-      if (request.add_edge && request.reference_keyframe_id >= 0 &&
-          request.reference_keyframe_id != result.keyframe_id) {
-        map::LoopEdge edge;
-        edge.match_id = result.keyframe_id;
-        edge.query_id = request.reference_keyframe_id;
-        edge.T_match_query = result.T_keyframe_camera *
-                             ros_conversions::FromPoseMessage(request.T_reference_camera).inverse();
-        edge.information = geometry::DiagonalPoseInformation(
-            relocalizer_options_.translation_sigma, relocalizer_options_.rotation_sigma_deg);
-        edge.inliers = result.inliers;
-        edge.probability = result.probability;
-        stereo_fabmap_slam::LoopEdge message = ros_conversions::ToLoopEdgeMessage(edge);
-        message.header = request.frame.header;
-        message.relocalization = true;
-        loop_publisher_.publish(message);
-        response.edge_added = true;
-        NODELET_INFO("relocalized: keyframe %ld joined to %ld, %d inliers",
-                     static_cast<long>(edge.query_id), static_cast<long>(edge.match_id),
-                     result.inliers);
-      }
-    }
-  } catch (const std::exception& error) {
-    response.success = false;
-    response.status = "error";
-    response.message = error.what();
-  }
-  response.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return true;
 }
 

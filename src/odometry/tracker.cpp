@@ -199,12 +199,13 @@ std::vector<geometry::PoseObservation> Tracker::Observations(
 
 map::Keyframe Tracker::MakeKeyframe(double timestamp, features::StereoFeatures features,
                                     const Eigen::Isometry3d& T_world_camera,
-                                    const std::vector<Match>& inlier_matches, bool starts_new_map) {
+                                    const std::vector<Match>& inlier_matches,
+                                    bool starts_new_segment) {
   map::Keyframe keyframe;
   keyframe.id = next_keyframe_id_++;
   keyframe.timestamp = timestamp;
   keyframe.T_world_camera = T_world_camera;
-  keyframe.starts_new_map = starts_new_map;
+  keyframe.starts_new_segment = starts_new_segment;
   keyframe.map_point_ids.assign(features.size(), -1);
   const std::int64_t keyframe_point_ids_begin = next_point_id_;
   for (const Match& m : inlier_matches) keyframe.map_point_ids[m.keypoint] = m.point->id;
@@ -232,10 +233,10 @@ void Tracker::StartMap(double timestamp, features::StereoFeatures features,
                       std::to_string(features.CountWithDepth()) + ") to start a map";
     return;
   }
-  const bool starts_new_map = had_map_;
+  const bool starts_new_segment = had_map_;
   local_map_.Clear();
   result->keyframe =
-      MakeKeyframe(timestamp, std::move(features), T_world_camera, {}, starts_new_map);
+      MakeKeyframe(timestamp, std::move(features), T_world_camera, {}, starts_new_segment);
   had_map_ = true;
   result->reason += (result->reason.empty() ? "" : "; ") + std::string("map started");
 }
@@ -327,7 +328,7 @@ TrackingResult Tracker::StartOver(double timestamp, features::StereoFeatures fea
 }
 
 Eigen::Isometry3d Tracker::Predict(double timestamp) const {
-  if (!has_last_) return Eigen::Isometry3d::Identity();
+  if (!has_last_) return start_pose_;
   // The motion over the time to this frame: when frames were skipped (a busy tracker, a bag
   // played faster than real time) or come faster, the last motion is scaled by the ratio of the
   // gaps. Gaps within a third of each other count as the same: camera clocks jitter, and a

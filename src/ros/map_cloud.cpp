@@ -15,7 +15,7 @@ void MapCloud::AddKeyframe(const stereo_fabmap_slam::Keyframe& keyframe) {
   for (const std::int64_t id : kept.ids) seen_map_points_.erase(id);
   kept = KeyframePoints();
   for (std::size_t i = 0; i < keyframe.points.size() && i < keyframe.map_point_ids.size(); ++i) {
-    const geometry_msgs::Point32& p = keyframe.points[i];
+    const geometry_msgs::Point& p = keyframe.points[i];
     if (keyframe.map_point_ids[i] < 0 || p.z <= 0) continue;
     if (!seen_map_points_.insert(keyframe.map_point_ids[i]).second) continue;
     kept.ids.push_back(keyframe.map_point_ids[i]);

@@ -38,6 +38,8 @@ ros::Time ToRosTime(std::int64_t timestamp_ns) {
   return time;
 }
 
+double ToSeconds(const ros::Time& time) { return static_cast<double>(ToNanoseconds(time)) * 1e-9; }
+
 std::int64_t ToNanoseconds(const ros::Time& time) {
   return static_cast<std::int64_t>(time.toNSec());
 }
@@ -128,7 +130,7 @@ stereo_fabmap_slam::Keyframe ToKeyframeMessage(const map::Keyframe& keyframe,
   message.header.stamp.fromSec(keyframe.timestamp);
   message.header.frame_id = frame_id;
   message.id = static_cast<std::uint64_t>(keyframe.id);
-  message.starts_new_map = keyframe.starts_new_map;
+  message.starts_new_segment = keyframe.starts_new_segment;
   message.pose = ToPoseMessage(keyframe.T_world_camera);
   message.fx = camera.fx;
   message.fy = camera.fy;
@@ -143,12 +145,23 @@ stereo_fabmap_slam::Keyframe ToKeyframeMessage(const map::Keyframe& keyframe,
   message.v.resize(n);
   message.u_right.assign(f.u_right.begin(), f.u_right.end());
   message.points.resize(n);
+  message.size.resize(n);
+  message.angle.resize(n);
+  message.response.resize(n);
+  message.octave.resize(n);
+  message.class_id.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    message.u[i] = f.keypoints[i].pt.x;
-    message.v[i] = f.keypoints[i].pt.y;
-    message.points[i].x = static_cast<float>(f.points[i].x());
-    message.points[i].y = static_cast<float>(f.points[i].y());
-    message.points[i].z = static_cast<float>(f.points[i].z());
+    const cv::KeyPoint& keypoint = f.keypoints[i];
+    message.u[i] = keypoint.pt.x;
+    message.v[i] = keypoint.pt.y;
+    message.size[i] = keypoint.size;
+    message.angle[i] = keypoint.angle;
+    message.response[i] = keypoint.response;
+    message.octave[i] = keypoint.octave;
+    message.class_id[i] = keypoint.class_id;
+    message.points[i].x = f.points[i].x();
+    message.points[i].y = f.points[i].y();
+    message.points[i].z = f.points[i].z();
   }
   PackDescriptors(f.descriptors, &message.descriptors, &message.descriptor_bytes,
                   &message.descriptors_are_float);
@@ -161,7 +174,8 @@ stereo_fabmap_slam::Keyframe ToKeyframeMessage(const map::Keyframe& keyframe,
 map::Keyframe FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message) {
   const std::size_t n = message.u.size();
   if (message.v.size() != n || message.u_right.size() != n || message.points.size() != n ||
-      message.map_point_ids.size() != n ||
+      message.map_point_ids.size() != n || message.size.size() != n || message.angle.size() != n ||
+      message.response.size() != n || message.octave.size() != n || message.class_id.size() != n ||
       message.descriptors.size() != n * message.descriptor_bytes ||
       (message.place_descriptor_bytes == 0
            ? !message.place_descriptors.empty()
@@ -172,15 +186,17 @@ map::Keyframe FromKeyframeMessage(const stereo_fabmap_slam::Keyframe& message) {
   }
   map::Keyframe keyframe;
   keyframe.id = static_cast<std::int64_t>(message.id);
-  keyframe.timestamp = message.header.stamp.toSec();
+  keyframe.timestamp = ToSeconds(message.header.stamp);
   keyframe.T_world_camera = FromPoseMessage(message.pose);
-  keyframe.starts_new_map = message.starts_new_map;
+  keyframe.starts_new_segment = message.starts_new_segment;
   features::StereoFeatures& f = keyframe.features;
   f.keypoints.resize(n);
   f.points.resize(n);
   f.u_right.assign(message.u_right.begin(), message.u_right.end());
   for (std::size_t i = 0; i < n; ++i) {
-    f.keypoints[i] = cv::KeyPoint(message.u[i], message.v[i], 7.0f);
+    f.keypoints[i] =
+        cv::KeyPoint(cv::Point2f(message.u[i], message.v[i]), message.size[i], message.angle[i],
+                     message.response[i], message.octave[i], message.class_id[i]);
     f.points[i] = Eigen::Vector3d(message.points[i].x, message.points[i].y, message.points[i].z);
   }
   f.descriptors = UnpackDescriptors(message.descriptors, message.descriptor_bytes,
@@ -263,34 +279,6 @@ map::LoopEdge FromLoopEdgeMessage(const stereo_fabmap_slam::LoopEdge& message) {
   edge.inliers = message.inliers;
   edge.probability = message.probability;
   return edge;
-}
-
-stereo_fabmap_slam::MapGraph ToMapGraphMessage(const backend::PoseGraph& graph) {
-  stereo_fabmap_slam::MapGraph message;
-  for (const auto& [id, pose] : graph.MapPoses()) {
-    message.keyframe_ids.push_back(static_cast<std::uint64_t>(id));
-    message.keyframe_poses.push_back(ToPoseMessage(pose));
-  }
-  for (const backend::PoseGraphEdge& edge : graph.Edges()) {
-    stereo_fabmap_slam::MapGraphEdge edge_message;
-    edge_message.from_id = static_cast<std::uint64_t>(edge.from);
-    edge_message.to_id = static_cast<std::uint64_t>(edge.to);
-    switch (edge.type) {
-      case backend::PoseGraphEdgeType::kOdometry:
-        edge_message.type = stereo_fabmap_slam::MapGraphEdge::ODOMETRY;
-        break;
-      case backend::PoseGraphEdgeType::kLoop:
-        edge_message.type = stereo_fabmap_slam::MapGraphEdge::LOOP;
-        break;
-      case backend::PoseGraphEdgeType::kRelocalization:
-        edge_message.type = stereo_fabmap_slam::MapGraphEdge::RELOCALIZATION;
-        break;
-    }
-    edge_message.T_from_to = ToPoseMessage(edge.T_from_to);
-    message.edges.push_back(edge_message);
-  }
-  message.map_to_odom = ToTransformMessage(graph.MapToOdom());
-  return message;
 }
 
 geometry_msgs::Transform ToTransformMessage(const Eigen::Isometry3d& transform) {

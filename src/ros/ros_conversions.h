@@ -16,9 +16,7 @@
 #include <stereo_fabmap_slam/Keyframe.h>
 #include <stereo_fabmap_slam/KeyframeUpdate.h>
 #include <stereo_fabmap_slam/LoopEdge.h>
-#include <stereo_fabmap_slam/MapGraph.h>
 
-#include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/map/keyframe.h"
 #include "stereo_fabmap_slam/map/keyframe_update.h"
@@ -28,6 +26,9 @@ namespace stereo_fabmap_slam::ros_conversions {
 
 ros::Time ToRosTime(std::int64_t timestamp_ns);
 std::int64_t ToNanoseconds(const ros::Time& time);
+// Seconds as the offline tools compute them from nanoseconds (1e-9 * ns): the same double for
+// the same stamp, which ros::Time::toSec (sec + 1e-9 * nsec) is not to the last bit.
+double ToSeconds(const ros::Time& time);
 
 // A mono8 image message holding a copy of `image` (which must be CV_8UC1).
 sensor_msgs::ImagePtr ToMono8ImageMessage(const cv::Mat& image, const ros::Time& stamp,
@@ -65,9 +66,8 @@ geometry::StereoCamera CameraOfKeyframe(const stereo_fabmap_slam::Keyframe& mess
 stereo_fabmap_slam::KeyframeUpdate ToKeyframeUpdateMessage(const map::KeyframeUpdate& update);
 map::KeyframeUpdate FromKeyframeUpdateMessage(const stereo_fabmap_slam::KeyframeUpdate& message);
 
-// Loop edges, and the pose graph as the Backend publishes it (header left to the caller).
+// Loop and relocalization edges.
 stereo_fabmap_slam::LoopEdge ToLoopEdgeMessage(const map::LoopEdge& edge);
 map::LoopEdge FromLoopEdgeMessage(const stereo_fabmap_slam::LoopEdge& message);
-stereo_fabmap_slam::MapGraph ToMapGraphMessage(const backend::PoseGraph& graph);
 
 }  // namespace stereo_fabmap_slam::ros_conversions

@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
       rotation_deg.push_back(Eigen::AngleAxisd(error.linear()).angle() * 180 / M_PI);
       wrong += error.translation().norm() > 0.5 ? 1 : 0;
     }
-    const std::size_t keyframes = slam.map()->pose_graph().size();
+    const std::size_t keyframes = slam.mapping().pose_graph().size();
     std::printf("map keyframes                %zu\n", keyframes);
     std::printf("attempts                     %d (every %d-th frame from %.1f s)\n", attempts,
                 every, from);

@@ -94,7 +94,7 @@ struct KeyframeTruth {
 std::vector<KeyframeTruth> MapKeyframes(const pipeline::StereoSlam& slam,
                                         const evaluation::Trajectory& truth) {
   std::vector<KeyframeTruth> keyframes;
-  for (const auto& [id, stored] : slam.map()->detector().database().keyframes()) {
+  for (const auto& [id, stored] : slam.place()->detector().database().keyframes()) {
     const std::optional<Eigen::Isometry3d> pose =
         evaluation::InterpolatePose(truth, stored.keyframe.timestamp, kGroundTruthMaxGap);
     if (!pose) continue;  // without ground truth it cannot be judged relevant

@@ -53,26 +53,6 @@ double NowMs() {
       .count();
 }
 
-// `every` as summary.json gives it: 4, or 2.5.
-std::string EveryText(double every) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%g", every);
-  return text;
-}
-
-struct Stats {
-  double median = 0, mean = 0;
-};
-
-Stats Summarise(std::vector<double> values) {
-  Stats stats;
-  if (values.empty()) return stats;
-  stats.mean = std::accumulate(values.begin(), values.end(), 0.0) / values.size();
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  stats.median = values[values.size() / 2];
-  return stats;
-}
-
 double CpuSeconds() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -94,69 +74,6 @@ double PeakResidentMegabytes() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
-}
-
-struct LoopCounts {
-  int accepted = 0, rejected = 0;
-  std::vector<double> detection_ms;  // per keyframe
-  double pose_graph_ms_max = 0;
-};
-
-// One row per verified candidate; times in seconds as in the trajectory files.
-LoopCounts WriteLoops(const pipeline::StereoSlam& slam, const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "w");
-  if (file == nullptr) throw std::runtime_error("cannot write " + path);
-  std::fprintf(file,
-               "query_keyframe,query_time,match_keyframe,match_time,probability,inliers,accepted,"
-               "reason\n");
-  LoopCounts counts;
-  for (const pipeline::FrameRecord& frame : slam.frames()) {
-    if (!frame.loop_detection) continue;
-    counts.detection_ms.push_back(frame.timing.loop_detection_ms);
-    counts.pose_graph_ms_max = std::max(counts.pose_graph_ms_max, frame.timing.pose_graph_ms);
-    for (const place_recognition::LoopCandidate& c : frame.loop_detection->candidates) {
-      if (!c.verified) continue;
-      std::fprintf(file, "%ld,%.9f,%ld,%.9f,%.6f,%d,%d,\"%s\"\n",
-                   static_cast<long>(frame.loop_detection->query_id), frame.timestamp,
-                   static_cast<long>(c.keyframe_id), slam.KeyframeTime(c.keyframe_id),
-                   c.probability, c.inliers, c.accepted ? 1 : 0, c.reason.c_str());
-      ++(c.accepted ? counts.accepted : counts.rejected);
-    }
-  }
-  std::fclose(file);
-  return counts;
-}
-
-void WriteTiming(const std::vector<pipeline::FrameRecord>& frames, const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "w");
-  if (file == nullptr) throw std::runtime_error("cannot write " + path);
-  std::fprintf(file,
-               "frame,timestamp,state,keyframe,rectification_ms,detection_ms,description_ms,"
-               "stereo_ms,tracking_ms,bundle_adjustment_ms,place_description_ms,"
-               "loop_detection_ms,pose_graph_ms,relocalization_ms,inliers,on_map,relocalization,"
-               "note\n");
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const pipeline::FrameRecord& f = frames[i];
-    const pipeline::FrameTiming& t = f.timing;
-    // The relocalization attempt of the frame, if any: its outcome, keyframe and inliers.
-    std::string relocalization;
-    if (f.relocalization) {
-      const relocalization::Relocalization& r = f.relocalization->result;
-      relocalization = std::string(relocalization::RelocalizationStatusName(r.status)) +
-                       (r.keyframe_id >= 0 ? " against keyframe " + std::to_string(r.keyframe_id)
-                                           : std::string()) +
-                       ": " + r.reason;
-    }
-    std::fprintf(file,
-                 "%zu,%.9f,%s,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,\"%s\","
-                 "\"%s\"\n",
-                 i, f.timestamp, odometry::TrackingStateName(f.state), f.is_keyframe ? 1 : 0,
-                 t.rectification_ms, t.detection_ms, t.description_ms, t.stereo_ms, t.tracking_ms,
-                 t.bundle_adjustment_ms, t.place_description_ms, t.loop_detection_ms,
-                 t.pose_graph_ms, t.relocalization_ms, f.inliers, f.on_map ? 1 : 0,
-                 relocalization.c_str(), f.note.c_str());
-  }
-  std::fclose(file);
 }
 
 }  // namespace
@@ -240,7 +157,7 @@ int main(int argc, char** argv) {
       if (load_map) slam.LoadMap(*load_map);
       slam.SetMode(mode);
     }
-    const std::size_t loaded_keyframes = slam.map() ? slam.map()->pose_graph().size() : 0;
+    const std::size_t loaded_keyframes = slam.mapping().pose_graph().size();
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
@@ -253,12 +170,18 @@ int main(int argc, char** argv) {
       const datasets::StereoImages images = sequence.LoadStereoPair(i);
       const double start = NowMs();
       const int skipped = i == 0 ? 0 : static_cast<int>(i - previous) - 1;
-      const pipeline::FrameRecord& frame =
+      const pipeline::FrameRecord* frame =
           slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right, skipped);
       processing_ms += NowMs() - start;
-      if (!quiet && (frame.state == odometry::TrackingState::kLost || processed % 100 == 0)) {
+      // What the input monitor found (a gap, a frozen or wrongly sized image...).
+      for (const pipeline::InputEvent& event : slam.last_input_events()) {
+        if (!quiet)
+          std::printf("frame %zu/%zu: %s\n", i + 1, sequence.size(), event.message.c_str());
+      }
+      if (!quiet && frame != nullptr &&
+          (frame->state == odometry::TrackingState::kLost || processed % 100 == 0)) {
         std::printf("frame %zu/%zu: %s, %zu keyframes, resident %.1f MB\n", i + 1, sequence.size(),
-                    odometry::TrackingStateName(frame.state), slam.keyframe_count(),
+                    odometry::TrackingStateName(frame->state), slam.keyframe_count(),
                     ResidentMegabytes());
       }
     }
@@ -266,78 +189,25 @@ int main(int argc, char** argv) {
     const double cpu_s = CpuSeconds() - cpu_start;
     if (save_map) slam.SaveMap(*save_map);
 
-    const evaluation::Trajectory trajectory = slam.MapTrajectory();
-    const evaluation::Trajectory odometry_trajectory = slam.OdometryTrajectory();
-    io::WriteTumTrajectory(trajectory, output + "/trajectory.txt");
-    io::WriteTumTrajectory(odometry_trajectory, output + "/odometry.txt");
-    const LoopCounts loops = WriteLoops(slam, output + "/loops.csv");
-    io::WriteTumTrajectory(slam.KeyframeTrajectory(), output + "/keyframes.txt");
-    WriteTiming(slam.frames(), output + "/timing.csv");
-
-    std::vector<double> stage[7];
-    int tracked = 0;
-    for (const pipeline::FrameRecord& f : slam.frames()) {
-      tracked += f.state != odometry::TrackingState::kLost ? 1 : 0;
-      const pipeline::FrameTiming& t = f.timing;
-      const double values[7] = {t.rectification_ms, t.detection_ms, t.description_ms,
-                                t.stereo_ms,        t.tracking_ms,  t.bundle_adjustment_ms,
-                                t.TrackingTotal()};
-      for (int k = 0; k < 7; ++k) stage[k].push_back(values[k]);
-    }
-    const char* names[7] = {"rectification", "detection",         "description",   "stereo",
-                            "tracking",      "bundle_adjustment", "tracking_total"};
+    const io::Trajectory trajectory = slam.MapTrajectory();
+    const io::Trajectory odometry_trajectory = slam.OdometryTrajectory();
     const double duration =
         sequence.size() > 1
             ? (sequence.frames().back().timestamp_ns - sequence.frames().front().timestamp_ns) *
                       1e-9 +
                   0.05
             : 0.05;
-    const std::size_t keyframes = static_cast<std::size_t>(
-        std::count_if(slam.frames().begin(), slam.frames().end(),
-                      [](const pipeline::FrameRecord& f) { return f.is_keyframe; }));
-    const std::size_t map_keyframes = slam.map() ? slam.map()->pose_graph().size() : 0;
-    std::string json = "{\"sequence\": \"" + name + "\", \"frames\": " + std::to_string(processed) +
-                       ", \"every\": " + EveryText(every) +
-                       ", \"frames_tracked\": " + std::to_string(tracked) +
-                       ", \"keyframes\": " + std::to_string(keyframes) + ", \"mode\": \"" +
-                       (mode == pipeline::SlamMode::kMapping ? "mapping" : "localization") +
-                       "\", \"map_keyframes_loaded\": " + std::to_string(loaded_keyframes) +
-                       ", \"map_keyframes\": " + std::to_string(map_keyframes);
-    char buffer[256];
-    std::snprintf(buffer, sizeof(buffer),
-                  ", \"wall_time_s\": %.3f, \"processing_time_s\": %.3f, \"cpu_time_s\": %.3f, "
-                  "\"realtime_factor\": %.3f, \"peak_rss_mb\": %.1f",
-                  wall_s, processing_ms / 1000.0, cpu_s, duration / (processing_ms / 1000.0),
-                  PeakResidentMegabytes());
-    json += buffer;
-    for (int k = 0; k < 7; ++k) {
-      const Stats s = Summarise(stage[k]);
-      std::snprintf(buffer, sizeof(buffer), ", \"%s_ms_median\": %.3f, \"%s_ms_mean\": %.3f",
-                    names[k], s.median, names[k], s.mean);
-      json += buffer;
-    }
-    std::snprintf(buffer, sizeof(buffer),
-                  ", \"loop_closing\": %s, \"loops_accepted\": %d, \"loops_rejected\": %d, "
-                  "\"loop_detection_ms_median\": %.3f, \"pose_graph_ms_max\": %.3f",
-                  loop_closing ? "true" : "false", loops.accepted, loops.rejected,
-                  Summarise(loops.detection_ms).median, loops.pose_graph_ms_max);
-    json += buffer;
-    int relocalizations = 0, attempts = 0, frames_lost = 0;
-    std::vector<double> relocalization_ms;
-    for (const pipeline::FrameRecord& f : slam.frames()) {
-      frames_lost += f.on_map ? 0 : 1;
-      if (!f.relocalization) continue;
-      ++attempts;
-      relocalizations += f.relocalization->result.success() ? 1 : 0;
-      relocalization_ms.push_back(f.relocalization->ms);
-    }
-    std::snprintf(buffer, sizeof(buffer),
-                  ", \"relocalizations\": %d, \"relocalization_attempts\": %d, "
-                  "\"frames_lost\": %d, \"relocalization_ms_median\": %.3f, "
-                  "\"trajectory_frames\": %zu",
-                  relocalizations, attempts, frames_lost, Summarise(relocalization_ms).median,
-                  trajectory.size());
-    json += buffer;
+    pipeline::JsonObject summary;
+    summary.AddString("sequence", name);
+    summary.AddNumber("every", every);
+    summary.AddString("mode", pipeline::SlamModeName(mode));
+    summary.Add("map_keyframes_loaded", loaded_keyframes);
+    summary.Add("wall_time_s", wall_s);
+    summary.Add("processing_time_s", processing_ms / 1000.0);
+    summary.Add("cpu_time_s", cpu_s);
+    summary.Add("realtime_factor", duration / (processing_ms / 1000.0));
+    summary.Add("peak_rss_mb", PeakResidentMegabytes(), 1);
+    slam.record().Write(output, slam.map_state(), &summary);
     // Ground truth is the body frame: move it to the rectified left camera we estimate. The ATE
     // needs 3 poses matched to it; with fewer (a sequence of one or two frames, a map that never
     // found the camera, ground truth that does not cover the images) the outputs are written all
@@ -358,17 +228,14 @@ int main(int argc, char** argv) {
     };
     if (sequence.has_ground_truth()) {
       if (const auto odometry_result = evaluate(odometry_trajectory)) {
-        std::snprintf(buffer, sizeof(buffer), ", \"ate_rmse_odometry\": %.6f",
-                      odometry_result->ate.rmse);
-        json += buffer;
+        summary.Add("ate_rmse_odometry", odometry_result->ate.rmse, 6);
       }
     }
     const std::optional<evaluation::EvaluationResult> evaluated =
         sequence.has_ground_truth() ? evaluate(trajectory) : std::nullopt;
     if (sequence.has_ground_truth() && !evaluated) {
-      json +=
-          ", \"ate_matched\": 0, \"ate_note\": \"the ATE needs at least 3 poses matched to the "
-          "ground truth\"";
+      summary.Add("ate_matched", 0);
+      summary.AddString("ate_note", "the ATE needs at least 3 poses matched to the ground truth");
     } else if (evaluated) {
       const evaluation::EvaluationResult& result = *evaluated;
       const auto& est = result.aligned_estimate;
@@ -377,15 +244,15 @@ int main(int argc, char** argv) {
           est.back().pose.translation() - est.front().pose.translation();
       const Eigen::Vector3d ref_move =
           ref.back().pose.translation() - ref.front().pose.translation();
-      std::snprintf(buffer, sizeof(buffer),
-                    ", \"ate_rmse\": %.6f, \"ate_max\": %.6f, \"ate_matched\": %zu, "
-                    "\"rpe_trans_rmse\": %.6f, \"displacement_estimate\": %.6f, "
-                    "\"displacement_ground_truth\": %.6f, \"displacement_error\": %.6f",
-                    result.ate.rmse, result.ate.max, result.matched, result.rpe.translation.rmse,
-                    est_move.norm(), ref_move.norm(), (est_move - ref_move).norm());
-      json += buffer;
+      summary.Add("ate_rmse", result.ate.rmse, 6);
+      summary.Add("ate_max", result.ate.max, 6);
+      summary.Add("ate_matched", result.matched);
+      summary.Add("rpe_trans_rmse", result.rpe.translation.rmse, 6);
+      summary.Add("displacement_estimate", est_move.norm(), 6);
+      summary.Add("displacement_ground_truth", ref_move.norm(), 6);
+      summary.Add("displacement_error", (est_move - ref_move).norm(), 6);
     }
-    json += "}\n";
+    const std::string json = summary.Text();
     std::FILE* file = std::fopen((output + "/summary.json").c_str(), "w");
     if (file == nullptr) throw std::runtime_error("cannot write " + output + "/summary.json");
     std::fputs(json.c_str(), file);

@@ -35,8 +35,8 @@ void SlamConfiguration::EnableLoopClosing(const place_recognition::PlaceRecognit
                                           const camera::StereoRectifier& rectifier,
                                           pipeline::StereoSlam* slam) const {
   slam->EnableLoopClosing(
-      pipeline::LoopClosing::LoadDetector(place, loop_detection, rectifier.camera(),
-                                          slam->descriptor_norm(), slam->max_match_distance()),
+      pipeline::PlaceStage::LoadDetector(place, loop_detection, rectifier.camera(),
+                                         slam->descriptor_norm(), slam->max_match_distance()),
       pose_graph, relocalization);
 }
 

@@ -1,12 +1,15 @@
-// Feeds the StereoTracker (launched by bad_input.test) real V101 frames around one kind of bad
-// input per test, and checks which frames produce odometry and what the graph is told: converted
-// colour is tracked; unsupported encodings, malformed images, wrong sizes, unpaired images,
-// repeated (frozen) images are not; a gap and time going backwards are named; and in every test
-// real frames after the fault are tracked again. The tests share the one tracker the launch
-// starts, in the order written here: each goes on from the stamps and frames the one before
-// left, and time going backwards comes last.
+// The StereoTracker's wiring of its input faults (launched by bad_input.test): one case per fault,
+// on real V101 frames. What each fault means is the tracking stage's and is tested without ROS
+// (tracking_stage_test); here every pair is followed to its tracked_frames message (no sleeping
+// and hoping), the odometry of tracked frames, and the warning the user reads: converted colour
+// is tracked; unsupported encodings, malformed images, wrong sizes, unpaired and repeated
+// (frozen) images are not; a gap and time going backwards are named; and in every test real
+// frames after the fault are tracked again. The tests share the one tracker the launch starts
+// and go on from the stamps the one before left; none depends on another's fault.
+#include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +20,7 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/image_encodings.h>
+#include <stereo_fabmap_slam/TrackedFrame.h>
 #include <opencv2/imgproc.hpp>
 
 #include "ros_conversions.h"
@@ -39,6 +43,12 @@ class Graph {
             [this](const nav_msgs::OdometryConstPtr& m) {
               std::lock_guard<std::mutex> lock(mutex_);
               stamps_.insert(ros_conversions::ToNanoseconds(m->header.stamp));
+            })),
+        frames_(node_.subscribe<stereo_fabmap_slam::TrackedFrame>(
+            "/tracked_frames", 100,
+            [this](const stereo_fabmap_slam::TrackedFrameConstPtr& m) {
+              std::lock_guard<std::mutex> lock(mutex_);
+              frames_seen_[ros_conversions::ToNanoseconds(m->header.stamp)] = *m;
             })),
         log_subscriber_(node_.subscribe<rosgraph_msgs::Log>(
             "/rosout", 100, [this](const rosgraph_msgs::LogConstPtr& m) {
@@ -64,13 +74,27 @@ class Graph {
     if (right) right_.publish(right);
   }
 
-  // Whether a log message of the graph (/rosout) since the last ForgetLog contained `text`.
-  bool Logged(const std::string& text) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const std::string& message : log_) {
-      if (message.find(text) != std::string::npos) return true;
-    }
-    return false;
+  // Whether a log message of the graph (/rosout) since the last ForgetLog contains `text`,
+  // waiting up to 5 s for it (/rosout comes on its own connection, behind the pairs).
+  bool Logged(const std::string& text, double wait = 5.0) {
+    return Within(wait, [&] {
+      for (const std::string& message : log_) {
+        if (message.find(text) != std::string::npos) return true;
+      }
+      return false;
+    });
+  }
+
+  // The tracker's account of the pair at `stamp_ns`, waiting up to 10 s for it: every pair it
+  // takes gets one, tracked or refused.
+  std::optional<stereo_fabmap_slam::TrackedFrame> Frame(std::int64_t stamp_ns) {
+    std::optional<stereo_fabmap_slam::TrackedFrame> frame;
+    Within(10.0, [&] {
+      const auto it = frames_seen_.find(stamp_ns);
+      if (it != frames_seen_.end()) frame = it->second;
+      return frame.has_value();
+    });
+    return frame;
   }
 
   void ForgetLog() {
@@ -78,29 +102,48 @@ class Graph {
     log_.clear();
   }
 
-  bool HasOdometry(std::int64_t stamp_ns) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return stamps_.count(stamp_ns) > 0;
+  // Whether odometry came for the stamp, waiting up to `wait` s (0: as things are).
+  bool HasOdometry(std::int64_t stamp_ns, double wait = 5.0) {
+    return Within(wait, [&] { return stamps_.count(stamp_ns) > 0; });
   }
 
   std::int64_t next_stamp = 0;
   std::size_t next_frame = 0;
 
  private:
+  // Polls `condition` (under the lock) until it holds or `seconds` have passed.
+  template <typename Condition>
+  bool Within(double seconds, Condition condition) {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
+    while (true) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (condition()) return true;
+      }
+      if (ros::WallTime::now() > deadline) return false;
+      ros::WallDuration(0.01).sleep();
+    }
+  }
+
   // What the callbacks fill comes first and the spinner last: destroyed in reverse, the spinner
   // stops before anything a callback touches is gone.
   std::mutex mutex_;
   std::set<std::int64_t> stamps_;
+  std::map<std::int64_t, stereo_fabmap_slam::TrackedFrame> frames_seen_;
   std::vector<std::string> log_;
   ros::NodeHandle node_;
   ros::Publisher left_, right_;
-  ros::Subscriber odometry_, log_subscriber_;
+  ros::Subscriber odometry_, frames_, log_subscriber_;
   ros::AsyncSpinner spinner_{1};
 };
 
 class BadInputTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { graph_ = std::make_unique<Graph>(); }
+  static void SetUpTestSuite() {
+    graph_ = std::make_unique<Graph>();
+    graph_->next_stamp =
+        datasets::EurocSequence::Open(EurocSequencePath("V101_micro")).frames()[0].timestamp_ns;
+  }
   static void TearDownTestSuite() { graph_.reset(); }
 
   BadInputTest() : sequence_(datasets::EurocSequence::Open(EurocSequencePath("V101_micro"))) {}
@@ -118,12 +161,24 @@ class BadInputTest : public ::testing::Test {
     return cv_bridge::CvImage(header, encoding, image).toImageMsg();
   }
 
-  // Publishes a pair (or one camera's image of it) and gives the tracker time to process it.
-  static void Send(const cv::Mat& left, const cv::Mat& right, const std::string& encoding,
-                   std::int64_t stamp_ns, bool send_left = true, bool send_right = true) {
+  // Publishes a pair and returns the tracker's account of it; one camera's image alone (no pair
+  // to account for) is followed by a camera's period of 0.15 s.
+  static std::optional<stereo_fabmap_slam::TrackedFrame> Send(
+      const cv::Mat& left, const cv::Mat& right, const std::string& encoding, std::int64_t stamp_ns,
+      bool send_left = true, bool send_right = true) {
     graph_->Publish(send_left ? Message(left, encoding, stamp_ns, "cam0") : nullptr,
                     send_right ? Message(right, encoding, stamp_ns, "cam1") : nullptr);
+    if (send_left && send_right) return graph_->Frame(stamp_ns);
     ros::WallDuration(0.15).sleep();
+    return std::nullopt;
+  }
+
+  // Whether the pair was tracked to a pose (what odometry is published for).
+  static bool Tracked(const std::optional<stereo_fabmap_slam::TrackedFrame>& frame) {
+    return frame && frame->tracked && frame->state != stereo_fabmap_slam::TrackedFrame::LOST;
+  }
+  static bool Refused(const std::optional<stereo_fabmap_slam::TrackedFrame>& frame) {
+    return frame && !frame->tracked;
   }
 
   // The next stamp of the stream the tests share: 20 Hz, as the camera's.
@@ -136,14 +191,13 @@ class BadInputTest : public ::testing::Test {
   // The next real frames of V101_micro (a hovering camera: any of them follows any other),
   // under the next stamps; whether the last of them got odometry.
   bool TrackRealFrames(int count) {
-    std::int64_t stamp = 0;
+    std::optional<stereo_fabmap_slam::TrackedFrame> last;
     for (int i = 0; i < count; ++i) {
-      stamp = NextStamp();
       const datasets::StereoImages images =
           sequence_.LoadStereoPair(graph_->next_frame++ % sequence_.frames().size());
-      Send(images.left, images.right, sensor_msgs::image_encodings::MONO8, stamp);
+      last = Send(images.left, images.right, sensor_msgs::image_encodings::MONO8, NextStamp());
     }
-    return HasOdometry(stamp);
+    return Tracked(last);
   }
 
   // One camera ("left" or "right") drops out for 1.8 s (12 images of the other): nothing to
@@ -154,7 +208,7 @@ class BadInputTest : public ::testing::Test {
       const std::int64_t t = NextStamp();
       Send(pair.left, pair.right, sensor_msgs::image_encodings::MONO8, t,
            /*send_left=*/camera != "left", /*send_right=*/camera != "right");
-      EXPECT_FALSE(HasOdometry(t));
+      EXPECT_FALSE(HasOdometry(t, 0.0));
     }
     EXPECT_TRUE(Logged("no " + camera + " images for")) << "a dropout is named as such";
     EXPECT_TRUE(TrackRealFrames(4)) << "tracking must resume when pairs arrive again";
@@ -164,8 +218,13 @@ class BadInputTest : public ::testing::Test {
   // A pair of V101_micro to corrupt.
   datasets::StereoImages SomePair() { return sequence_.LoadStereoPair(5); }
 
-  static bool Logged(const std::string& text) { return graph_->Logged(text); }
-  static bool HasOdometry(std::int64_t stamp_ns) { return graph_->HasOdometry(stamp_ns); }
+  // `wait` 0 for what must not have been said (after what must have, which is later).
+  static bool Logged(const std::string& text, double wait = 5.0) {
+    return graph_->Logged(text, wait);
+  }
+  static bool HasOdometry(std::int64_t stamp_ns, double wait = 5.0) {
+    return graph_->HasOdometry(stamp_ns, wait);
+  }
 
   static constexpr std::int64_t kStep = 50'000'000;  // 20 Hz
   static std::unique_ptr<Graph> graph_;
@@ -175,8 +234,9 @@ class BadInputTest : public ::testing::Test {
 std::unique_ptr<Graph> BadInputTest::graph_;
 
 TEST_F(BadInputTest, RealFramesAreTracked) {
-  graph_->next_stamp = sequence_.frames()[0].timestamp_ns;
+  const std::int64_t last = graph_->next_stamp + 4 * kStep;
   EXPECT_TRUE(TrackRealFrames(5)) << "real frames must be tracked";
+  EXPECT_TRUE(HasOdometry(last)) << "and their odometry published";
 }
 
 TEST_F(BadInputTest, ColourIsConvertedAndTracked) {
@@ -184,9 +244,8 @@ TEST_F(BadInputTest, ColourIsConvertedAndTracked) {
   cv::Mat left_bgr, right_bgr;
   cv::cvtColor(pair.left, left_bgr, cv::COLOR_GRAY2BGR);
   cv::cvtColor(pair.right, right_bgr, cv::COLOR_GRAY2BGR);
-  const std::int64_t t = NextStamp();
-  Send(left_bgr, right_bgr, sensor_msgs::image_encodings::BGR8, t);
-  EXPECT_TRUE(HasOdometry(t)) << "bgr8 must be converted";
+  EXPECT_TRUE(Tracked(Send(left_bgr, right_bgr, sensor_msgs::image_encodings::BGR8, NextStamp())))
+      << "bgr8 must be converted";
 }
 
 TEST_F(BadInputTest, UnsupportedEncodingIsSkippedAndNamed) {
@@ -194,9 +253,8 @@ TEST_F(BadInputTest, UnsupportedEncodingIsSkippedAndNamed) {
   cv::Mat left_float, right_float;
   pair.left.convertTo(left_float, CV_32FC1);
   pair.right.convertTo(right_float, CV_32FC1);
-  const std::int64_t t = NextStamp();
-  Send(left_float, right_float, sensor_msgs::image_encodings::TYPE_32FC1, t);
-  EXPECT_FALSE(HasOdometry(t));
+  EXPECT_TRUE(Refused(
+      Send(left_float, right_float, sensor_msgs::image_encodings::TYPE_32FC1, NextStamp())));
   EXPECT_TRUE(Logged("unsupported image encoding (32FC1 / 32FC1)"));
   EXPECT_TRUE(TrackRealFrames(2)) << "tracking goes on after the skipped pair";
 }
@@ -207,10 +265,9 @@ TEST_F(BadInputTest, MalformedImageIsSkippedAndNamed) {
   sensor_msgs::ImagePtr broken = Message(pair.left, sensor_msgs::image_encodings::MONO8, t, "cam0");
   broken->data.resize(broken->data.size() / 2);  // half its data missing
   graph_->Publish(broken, Message(pair.right, sensor_msgs::image_encodings::MONO8, t, "cam1"));
-  ros::WallDuration(0.3).sleep();
-  EXPECT_FALSE(HasOdometry(t));
+  EXPECT_TRUE(Refused(graph_->Frame(t)));
   EXPECT_TRUE(Logged("malformed image on left/image_raw: 180480 bytes of data for 480 rows"));
-  EXPECT_FALSE(Logged("unsupported image encoding (mono8")) << "not called an encoding";
+  EXPECT_FALSE(Logged("unsupported image encoding (mono8", 0.0)) << "not called an encoding";
   EXPECT_TRUE(TrackRealFrames(2)) << "tracking goes on after the skipped pair";
 }
 
@@ -219,9 +276,8 @@ TEST_F(BadInputTest, SizeOtherThanTheCalibrationsIsSkippedAndNamed) {
   cv::Mat small_left, small_right;
   cv::resize(pair.left, small_left, cv::Size(376, 240));
   cv::resize(pair.right, small_right, cv::Size(376, 240));
-  const std::int64_t t = NextStamp();
-  Send(small_left, small_right, sensor_msgs::image_encodings::MONO8, t);
-  EXPECT_FALSE(HasOdometry(t));
+  EXPECT_TRUE(
+      Refused(Send(small_left, small_right, sensor_msgs::image_encodings::MONO8, NextStamp())));
   EXPECT_TRUE(Logged("image size 376x240 / 376x240 differs from the calibration's 752x480"));
   EXPECT_TRUE(TrackRealFrames(2)) << "tracking goes on after the skipped pair";
 }
@@ -236,9 +292,11 @@ TEST_F(BadInputTest, LeftCameraDroppingOutIsNamedAndTrackingResumes) {
 
 TEST_F(BadInputTest, BlankImagesLoseTrackingAndRealFramesStartAgain) {
   const cv::Mat black(480, 752, CV_8UC1, cv::Scalar(0));
-  const std::int64_t t = NextStamp();
-  Send(black, black, sensor_msgs::image_encodings::MONO8, t);
-  EXPECT_FALSE(HasOdometry(t)) << "no features, no pose";
+  const std::optional<stereo_fabmap_slam::TrackedFrame> blank =
+      Send(black, black, sensor_msgs::image_encodings::MONO8, NextStamp());
+  ASSERT_TRUE(blank.has_value());
+  EXPECT_TRUE(blank->tracked) << "blank images are input, not a fault of it";
+  EXPECT_FALSE(Tracked(blank)) << "no features, no pose";
   EXPECT_TRUE(Logged("tracking lost:"));
   EXPECT_TRUE(TrackRealFrames(4)) << "tracking must resume after blank images";
 }
@@ -247,14 +305,13 @@ TEST_F(BadInputTest, BlankImagesLoseTrackingAndRealFramesStartAgain) {
 // skipped with a warning, and the next real frame is tracked again.
 TEST_F(BadInputTest, FrozenCameraIsNamedAndItsRepeatsSkipped) {
   const datasets::StereoImages frozen = sequence_.LoadStereoPair(graph_->next_frame++);
-  const std::int64_t first_frozen = graph_->next_stamp;
-  std::int64_t t = 0;
-  for (int i = 0; i < 4; ++i) {
-    t = NextStamp();
-    Send(frozen.left, frozen.right, sensor_msgs::image_encodings::MONO8, t);
+  EXPECT_TRUE(
+      Tracked(Send(frozen.left, frozen.right, sensor_msgs::image_encodings::MONO8, NextStamp())));
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(
+        Refused(Send(frozen.left, frozen.right, sensor_msgs::image_encodings::MONO8, NextStamp())))
+        << "a repeated image is not a frame";
   }
-  EXPECT_TRUE(HasOdometry(first_frozen));
-  EXPECT_FALSE(HasOdometry(t)) << "a repeated image is not a frame";
   EXPECT_TRUE(Logged("the left and right cameras are frozen: the same image"));
   EXPECT_TRUE(TrackRealFrames(1)) << "tracking goes on when the images change";
   EXPECT_TRUE(Logged("change again after 3 frozen frame(s)"));
@@ -269,11 +326,10 @@ TEST_F(BadInputTest, GapIsNamedAndTrackedAcross) {
   EXPECT_TRUE(TrackRealFrames(1));
 }
 
-// Time going backwards (a looped bag): reset, named, and tracking goes on from there. Last: the
-// stream's stamps start again below the others'.
+// Time going backwards (a looped bag): reset, named, and tracking goes on from there, upward from
+// the earlier stamps.
 TEST_F(BadInputTest, TimeGoingBackwardsResetsAndTrackingGoesOn) {
-  graph_->next_stamp = sequence_.frames()[0].timestamp_ns - 10 * kStep;
-  graph_->next_frame = 0;
+  graph_->next_stamp -= 10 * kStep;
   EXPECT_TRUE(TrackRealFrames(3)) << "tracking must resume after time went backwards";
   EXPECT_TRUE(Logged("time went backwards")) << "the reset is named";
 }

@@ -105,7 +105,8 @@ GraphRun PlayBag(const std::string& bag, const std::string& arguments, const std
         std::lock_guard<std::mutex> lock(mutex);
         ++run.keyframes;
         keyframe_ids.insert(message->id);
-        if (message->starts_new_map) run.new_map_stamps.push_back(message->header.stamp.toSec());
+        if (message->starts_new_segment)
+          run.new_map_stamps.push_back(message->header.stamp.toSec());
       });
   const ros::Subscriber graph_subscriber = node.subscribe<stereo_fabmap_slam::MapGraph>(
       "/map_graph", 10, [&](const stereo_fabmap_slam::MapGraphConstPtr& message) {

@@ -37,12 +37,12 @@ Eigen::Isometry3d At(double x, double y, double z) {
 
 map::Keyframe MakeKeyframe(std::int64_t id, double time, const StereoWorld& world,
                            const Eigen::Isometry3d& true_pose, const Eigen::Isometry3d& odometry,
-                           bool starts_new_map = false) {
+                           bool starts_new_segment = false) {
   map::Keyframe keyframe;
   keyframe.id = id;
   keyframe.timestamp = time;
   keyframe.T_world_camera = odometry;
-  keyframe.starts_new_map = starts_new_map;
+  keyframe.starts_new_segment = starts_new_segment;
   keyframe.features = Observe(world, true_pose);
   keyframe.map_point_ids.assign(keyframe.features.size(), -1);
   keyframe.place_descriptors = cv::Mat(50, 64, CV_8U);
@@ -171,7 +171,7 @@ TEST(LoopDetector, RepeatedPosterAcrossSegmentsIsRejectedByItsSpread) {
   detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
   // Tracking was lost on the way: no odometry relates B to A.
   const LoopDetection detection = detector.Process(
-      MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(0, 0, 0), /*starts_new_map=*/true));
+      MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(0, 0, 0), /*starts_new_segment=*/true));
   const LoopCandidate* a = CandidateFor(detection, 0);
   ASSERT_NE(a, nullptr);
   EXPECT_FALSE(a->accepted);

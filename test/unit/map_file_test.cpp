@@ -12,7 +12,8 @@
 #include "file_mutations.h"
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/io/input_error.h"
-#include "stereo_fabmap_slam/pipeline/loop_closing.h"
+#include "stereo_fabmap_slam/pipeline/mapping_stage.h"
+#include "stereo_fabmap_slam/pipeline/place_stage.h"
 #include "stereo_world.h"
 #include "test_support.h"
 #include "toy_place_recognition.h"
@@ -20,9 +21,31 @@
 namespace stereo_fabmap_slam::test {
 namespace {
 
-pipeline::LoopClosing MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
-  pipeline::LoopClosing map(ToyLoopDetector(vocabulary_seed), backend::PoseGraphOptions(),
-                            [] { return 0.0; });
+// The two stages that keep a map, composed as StereoSlam composes them.
+struct TestMap {
+  explicit TestMap(std::uint64_t vocabulary_seed)
+      : mapping(backend::BundleAdjustmentOptions(), backend::PoseGraphOptions(),
+                [] { return 0.0; }),
+        place(ToyLoopDetector(vocabulary_seed), relocalization::RelocalizerOptions(),
+              [] { return 0.0; }) {}
+
+  void AddKeyframe(const map::Keyframe& keyframe) {
+    place.AddKeyframe(keyframe, mapping.AddKeyframe(keyframe, kTestCamera));
+  }
+  map::SavedMap Save(const geometry::StereoCamera& camera) const {
+    return place.Save(mapping, camera);
+  }
+  void Load(const map::SavedMap& saved, const geometry::StereoCamera& camera) {
+    place.Load(saved, camera);
+    mapping.Load(saved);
+  }
+
+  pipeline::MappingStage mapping;
+  pipeline::PlaceStage place;
+};
+
+TestMap MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
+  TestMap map(vocabulary_seed);
   StereoWorld world;
   world.Add(RandomPoints(300, 3), 5);
   for (int i = 0; i < keyframes; ++i) {
@@ -31,7 +54,7 @@ pipeline::LoopClosing MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
     keyframe.timestamp = 100.0 + 0.5 * i;
     keyframe.T_world_camera = Eigen::Translation3d(0.1 * i, 0.0, 0.02 * i) *
                               Eigen::AngleAxisd(0.05 * i, Eigen::Vector3d::UnitY());
-    keyframe.starts_new_map = i == 3;  // two pieces of odometry
+    keyframe.starts_new_segment = i == 3;  // two pieces of odometry
     keyframe.features = Observe(world, keyframe.T_world_camera);
     keyframe.map_point_ids.resize(keyframe.features.size());
     for (std::size_t k = 0; k < keyframe.map_point_ids.size(); ++k) {
@@ -40,7 +63,7 @@ pipeline::LoopClosing MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
     keyframe.place_descriptors = cv::Mat(40, 64, CV_8U);
     cv::RNG(static_cast<std::uint64_t>(50 + i))
         .fill(keyframe.place_descriptors, cv::RNG::UNIFORM, 0, 256);
-    map.AddKeyframe(keyframe, map::KeyframeUpdate());
+    map.AddKeyframe(keyframe);
   }
   if (keyframes < 5) return map;
   // A relocalization edge joining the two pieces.
@@ -49,7 +72,7 @@ pipeline::LoopClosing MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
   edge.query_id = 4;
   edge.T_match_query = Eigen::Translation3d(0.3, 0.0, 0.05) * Eigen::Isometry3d::Identity();
   edge.information = geometry::DiagonalPoseInformation(0.02, 0.2);
-  map.AddRelocalization(edge);
+  map.mapping.AddEdge(edge, backend::PoseGraphEdgeType::kRelocalization);
   return map;
 }
 
@@ -66,7 +89,7 @@ void ExpectSameMaps(const map::SavedMap& a, const map::SavedMap& b, double pose_
     const map::Keyframe& y = b.keyframes[i].keyframe;
     EXPECT_EQ(x.id, y.id);
     EXPECT_EQ(x.timestamp, y.timestamp);
-    EXPECT_EQ(x.starts_new_map, y.starts_new_map);
+    EXPECT_EQ(x.starts_new_segment, y.starts_new_segment);
     EXPECT_EQ(x.T_world_camera.matrix(), y.T_world_camera.matrix());
     if (pose_tolerance == 0.0) {
       EXPECT_EQ(a.keyframes[i].T_map_camera.matrix(), b.keyframes[i].T_map_camera.matrix());
@@ -108,7 +131,7 @@ void WriteBytes(const std::string& path, const std::vector<char>& bytes) {
 TEST(MapFile, RoundTripsExactlyThroughAFileAndIntoAnotherMap) {
   TemporaryDirectory temp;
   const std::string path = temp.path() + "/map.bin";
-  const pipeline::LoopClosing original = MakeMap(7, 6);
+  const TestMap original = MakeMap(7, 6);
   const map::SavedMap saved = original.Save(kTestCamera);
   ASSERT_EQ(saved.keyframes.size(), 6u);
   ASSERT_EQ(saved.edges.size(), 1u);
@@ -117,11 +140,11 @@ TEST(MapFile, RoundTripsExactlyThroughAFileAndIntoAnotherMap) {
 
   // Loaded into a running map of the same vocabulary, it replaces that map: the same keyframes,
   // map poses, edges and pieces of odometry, so saving again gives the same map.
-  pipeline::LoopClosing other = MakeMap(7, 2);
+  TestMap other = MakeMap(7, 2);
   other.Load(map::LoadMapFile(path), kTestCamera);
   ExpectSameMaps(saved, other.Save(kTestCamera), 1e-12);
-  EXPECT_TRUE(other.pose_graph().Connected(0, 5));  // joined by the relocalization edge
-  EXPECT_EQ(other.detector().database().Get(4).segment, 1);
+  EXPECT_TRUE(other.mapping.InMap(5));  // joined to the map by the relocalization edge
+  EXPECT_EQ(other.place.detector().database().Get(4).segment, 1);
 }
 
 TEST(MapFile, DamagedFilesAreRefused) {
@@ -160,7 +183,7 @@ TEST(MapFile, FuzzedFilesAreRefusedOrLoadedNeverCrash) {
 
 TEST(MapFile, AMapOfAnotherVocabularyOrCameraIsRefusedAndTheRunningMapKept) {
   const map::SavedMap saved = MakeMap(7, 6).Save(kTestCamera);
-  pipeline::LoopClosing running = MakeMap(8, 2);  // another vocabulary
+  TestMap running = MakeMap(8, 2);  // another vocabulary
   const map::SavedMap before = running.Save(kTestCamera);
   try {
     running.Load(saved, kTestCamera);
@@ -170,7 +193,7 @@ TEST(MapFile, AMapOfAnotherVocabularyOrCameraIsRefusedAndTheRunningMapKept) {
   }
   ExpectSameMaps(before, running.Save(kTestCamera), 1e-12);
 
-  pipeline::LoopClosing same_vocabulary = MakeMap(7, 2);
+  TestMap same_vocabulary = MakeMap(7, 2);
   const map::SavedMap kept = same_vocabulary.Save(kTestCamera);
   geometry::StereoCamera other_camera = kTestCamera;
   other_camera.baseline = 0.12;

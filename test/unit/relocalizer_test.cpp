@@ -78,7 +78,7 @@ class RenderedRoute : public ::testing::Test {
                                       [] { return 0.0; }),
                  evaluation::TransformToSensorFrame(sequence.ground_truth(),
                                                     rectifier.T_body_rectified_left())});
-    slam->slam.EnableLoopClosing(pipeline::LoopClosing::LoadDetector(
+    slam->slam.EnableLoopClosing(pipeline::PlaceStage::LoadDetector(
                                      place_options, options.loop_detection, rectifier.camera(),
                                      slam->slam.descriptor_norm(), slam->slam.max_match_distance()),
                                  options.pose_graph, options.relocalization);

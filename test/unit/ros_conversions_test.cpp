@@ -97,7 +97,7 @@ map::Keyframe ExampleKeyframe() {
   keyframe.T_world_camera.linear() =
       Eigen::AngleAxisd(0.3, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
   keyframe.T_world_camera.translation() = Eigen::Vector3d(2.0, -1.0, 0.5);
-  keyframe.starts_new_map = true;
+  keyframe.starts_new_segment = true;
   features::StereoFeatures& f = keyframe.features;
   for (int i = 0; i < 5; ++i) {
     f.keypoints.emplace_back(10.5f + 100 * i, 20.25f + 50 * i, 7.0f);
@@ -121,7 +121,7 @@ TEST(RosConversions, KeyframeRoundTrip) {
   EXPECT_EQ(back.id, keyframe.id);
   EXPECT_NEAR(back.timestamp, keyframe.timestamp, 1e-6);  // ROS time holds nanoseconds
   EXPECT_TRUE(back.T_world_camera.isApprox(keyframe.T_world_camera, 1e-12));
-  EXPECT_EQ(back.starts_new_map, keyframe.starts_new_map);
+  EXPECT_EQ(back.starts_new_segment, keyframe.starts_new_segment);
   ASSERT_EQ(back.features.size(), keyframe.features.size());
   for (std::size_t i = 0; i < keyframe.features.size(); ++i) {
     EXPECT_EQ(back.features.keypoints[i].pt, keyframe.features.keypoints[i].pt);

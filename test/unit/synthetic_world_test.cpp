@@ -307,10 +307,9 @@ TEST(SyntheticWorld, OdometryOnARenderedLoop) {
   int tracked = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const datasets::StereoImages images = sequence.LoadStereoPair(i);
-    tracked += odometry.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right).state !=
-                       odometry::TrackingState::kLost
-                   ? 1
-                   : 0;
+    const pipeline::FrameRecord* frame =
+        odometry.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+    tracked += frame != nullptr && frame->state != odometry::TrackingState::kLost ? 1 : 0;
   }
   EXPECT_EQ(tracked, static_cast<int>(sequence.size()));
   const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(

@@ -116,7 +116,7 @@ TEST(Tracker, SkippedFramesDoNotLoseTracking) {
   const odometry::TrackingResult after_gap =
       camera.tracker.Track(0.06, Observe(camera.world, SidewaysAndTurned(1.8)));
   EXPECT_NE(after_gap.state, odometry::TrackingState::kLost) << after_gap.reason;
-  EXPECT_FALSE(after_gap.keyframe && after_gap.keyframe->starts_new_map) << after_gap.reason;
+  EXPECT_FALSE(after_gap.keyframe && after_gap.keyframe->starts_new_segment) << after_gap.reason;
   EXPECT_EQ(after_gap.reason.find("by descriptor"), std::string::npos) << after_gap.reason;
   EXPECT_LT((after_gap.T_world_camera.translation() - SidewaysAndTurned(1.8).translation()).norm(),
             1e-3);
@@ -193,7 +193,7 @@ TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
   const odometry::TrackingResult after = camera.tracker.Track(0.06, Observe(camera.world, turned));
   EXPECT_EQ(after.state, odometry::TrackingState::kOk) << after.reason;
   EXPECT_NE(after.reason.find("found by descriptor"), std::string::npos) << after.reason;
-  EXPECT_FALSE(after.keyframe && after.keyframe->starts_new_map) << after.reason;
+  EXPECT_FALSE(after.keyframe && after.keyframe->starts_new_segment) << after.reason;
   EXPECT_LT((after.T_world_camera.translation() - turned.translation()).norm(), 1e-3);
   EXPECT_LT(Eigen::AngleAxisd(after.T_world_camera.linear().transpose() * turned.linear()).angle(),
             1e-4);
@@ -240,7 +240,7 @@ TEST(Tracker, AFrameThatShowsTooLittleOfTheMapKeepsItForTheNext) {
   const odometry::TrackingResult next =
       camera.tracker.Track(0.04, Observe(camera.world, SidewaysAndTurned(1.2)));
   EXPECT_EQ(next.state, odometry::TrackingState::kOk) << next.reason;
-  EXPECT_FALSE(next.keyframe && next.keyframe->starts_new_map) << next.reason;
+  EXPECT_FALSE(next.keyframe && next.keyframe->starts_new_segment) << next.reason;
   EXPECT_LT((next.T_world_camera.translation() - SidewaysAndTurned(1.2).translation()).norm(),
             1e-3);
 }
@@ -256,7 +256,7 @@ TEST(Tracker, AFrameThatShowsNothingOfTheMapStartsANewPieceAtOnce) {
       camera.tracker.Track(0.03, Observe(elsewhere, Eigen::Isometry3d::Identity()));
   EXPECT_FALSE(kidnapped.map_kept) << kidnapped.reason;
   ASSERT_TRUE(kidnapped.keyframe.has_value()) << kidnapped.reason;
-  EXPECT_TRUE(kidnapped.keyframe->starts_new_map) << kidnapped.reason;
+  EXPECT_TRUE(kidnapped.keyframe->starts_new_segment) << kidnapped.reason;
 }
 
 TEST(Tracker, TheMapIsKeptNoLongerThanMaxTimeLost) {
@@ -271,7 +271,7 @@ TEST(Tracker, TheMapIsKeptNoLongerThanMaxTimeLost) {
   const odometry::TrackingResult late = camera.tracker.Track(0.55, glimpse);
   EXPECT_FALSE(late.map_kept) << late.reason;
   ASSERT_TRUE(late.keyframe.has_value()) << late.reason;
-  EXPECT_TRUE(late.keyframe->starts_new_map) << late.reason;
+  EXPECT_TRUE(late.keyframe->starts_new_segment) << late.reason;
 }
 
 }  // namespace

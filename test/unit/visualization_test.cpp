@@ -157,7 +157,7 @@ TEST(MapCloud, EachMapPointOnceAtItsKeyframesMapPose) {
   first.id = 0;
   second.id = 1;
   const auto point = [](float x, float y, float z) {
-    geometry_msgs::Point32 p;
+    geometry_msgs::Point p;
     p.x = x;
     p.y = y;
     p.z = z;

@@ -39,8 +39,8 @@ struct PoseGraphSummary {
 // poses T_map_camera are optimised. Edges: odometry between consecutive keyframes of a segment
 // (what the tracker measured, from the latest odometry poses) and loop edges (verified
 // revisits, with a Cauchy loss). Segments are runs of keyframes with unbroken tracking; loop
-// edges join them into components, each with its own gauge: its oldest keyframe stays fixed.
-// A component without loops has nothing to correct: its poses are its odometry poses under the
+// edges join them into pieces, each with its own gauge: its oldest keyframe stays fixed.
+// A piece without loops has nothing to correct: its poses are its odometry poses under the
 // fixed correction it was started with, and Optimize() leaves it out of the problem.
 // Not thread-safe; no clock, no global state.
 class PoseGraph {
@@ -55,10 +55,10 @@ class PoseGraph {
   void AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_camera,
                    bool starts_new_segment);
   // Bundle adjustment moved a keyframe in odom: the odometry edges touching it follow (at the
-  // next Optimize(), or at once in a component without loops). Throws for unknown ids.
+  // next Optimize(), or at once in a piece without loops). Throws for unknown ids.
   void UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera);
   // Throws std::invalid_argument for unknown ids, a loop of a keyframe with itself, or an
-  // information matrix that is not symmetric positive definite. A loop joining two components
+  // information matrix that is not symmetric positive definite. A loop joining two pieces
   // moves the younger one rigidly onto the older one through this edge at once, so that the edge
   // starts the optimisation satisfied instead of hundreds of sigmas off, where its robust loss
   // would ignore it.
@@ -67,19 +67,22 @@ class PoseGraph {
   // Sets a keyframe's map pose as a saved map had it (after AddKeyframe and AddLoop have rebuilt
   // the graph); throws for unknown ids.
   void RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera);
-  // Optimises the components that have loops, from the current map poses. When every loop added
+  // Optimises the pieces that have loops, from the current map poses. When every loop added
   // since the last Optimize() already agrees with the map (its squared whitened error below
   // options.consistent_loop_chi2), only the options.local_keyframes keyframes nearest those
   // loops in the graph move, against their fixed neighbours: such a loop corrects little, and
   // near it. On a route driven again and again a loop comes with nearly every keyframe, and
   // optimising the whole graph for each grows with the laps. The first Optimize(), a loop that
-  // disagrees, and local_keyframes 0 optimise every component with loops.
+  // disagrees, and local_keyframes 0 optimise every piece with loops.
   PoseGraphSummary Optimize();
 
   bool Contains(std::int64_t id) const;
   // Whether loop or relocalization edges join the two keyframes' segments (one map); throws
   // std::invalid_argument for unknown ids.
   bool Connected(std::int64_t a, std::int64_t b) const;
+  // Whether the keyframe is joined to the graph's first keyframe (the map's anchor): in the map,
+  // not in a piece of its own. False for an unknown id.
+  bool InMap(std::int64_t id) const;
   Eigen::Isometry3d MapPose(std::int64_t id) const;  // T_map_camera; throws for unknown ids
   std::map<std::int64_t, Eigen::Isometry3d> MapPoses() const;
   // T_map_odom: the correction of the newest keyframe, map pose * odom pose^-1, what a ROS
@@ -112,16 +115,16 @@ class PoseGraph {
   };
   struct Segment {
     std::size_t first;  // index of its first keyframe
-    // Union-find over segments: components are segments joined by loops. The root is the
-    // oldest segment of the component, whose first keyframe is the component's gauge.
+    // Union-find over segments: pieces are segments joined by loops. The root is the
+    // oldest segment of the piece, whose first keyframe is the piece's gauge.
     int parent;
-    int loops;  // loop edges in the component (valid at the root)
-    // Map pose = T_map_odom * odometry pose while the component has no loops.
+    int loops;  // loop edges in the piece (valid at the root)
+    // Map pose = T_map_odom * odometry pose while the piece has no loops.
     Eigen::Isometry3d T_map_odom;
   };
 
   std::size_t IndexOf(std::int64_t id) const;  // throws std::invalid_argument
-  int ComponentOf(int segment) const;          // the root segment
+  int PieceOf(int segment) const;              // the root segment
   // The squared whitened error of a loop at the current map poses.
   double LoopChiSquare(const Loop& loop) const;
   // The options_.local_keyframes keyframes (by index) nearest the loops from index first_loop on,
@@ -135,7 +138,7 @@ class PoseGraph {
   std::vector<Loop> loops_;
   std::vector<Segment> segments_;
   std::size_t loops_optimised_ = 0;  // loops_[0, loops_optimised_) were in an Optimize()
-  bool optimised_ = false;           // an Optimize() has run over every component with loops
+  bool optimised_ = false;           // an Optimize() has run over every piece with loops
 };
 
 }  // namespace stereo_fabmap_slam::backend

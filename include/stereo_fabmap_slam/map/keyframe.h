@@ -21,8 +21,9 @@ struct Keyframe {
   // Map point observed by each key point; -1 if none. Ids the backend has not seen before are
   // new points, placed at T_world_camera * features.points[i].
   std::vector<std::int64_t> map_point_ids;
-  // Tracking was lost before this keyframe: it starts a new map, unrelated to earlier keyframes.
-  bool starts_new_map = false;
+  // Tracking was lost (or reset) before this keyframe: it starts a new segment, joined to no
+  // earlier keyframe by odometry.
+  bool starts_new_segment = false;
   // Place recognition's descriptors of the left image (its own key point selection, the
   // vocabulary's descriptor type: CV_8U binary or CV_32F), one per row; computed once by the
   // front end so that loop detection needs nothing but the keyframe.

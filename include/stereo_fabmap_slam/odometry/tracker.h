@@ -75,7 +75,11 @@ class Tracker {
   // Forget the local map but not the motion: the next frame starts a new piece of map where the
   // odometry predicts it, so odom stays continuous (e.g. after a map was loaded whose keyframe
   // ids the local map's may share).
-  void StartNewMap() { local_map_.Clear(); }
+  void StartNewLocalMap() { local_map_.Clear(); }
+  // Where the camera is at the first frame (and after Reset): the odometry frame's origin is
+  // then not the first camera but, e.g., the robot's base (T_odom_camera = the camera's
+  // mounting T_base_camera, REP-105's odom). Identity by default: odom is the first camera.
+  void SetStartPose(const Eigen::Isometry3d& T_odom_camera) { start_pose_ = T_odom_camera; }
   // New keyframes and map points get ids of at least these (a loaded map holds the lower ones).
   void SkipIdsBelow(std::int64_t keyframe_id, std::int64_t point_id) {
     next_keyframe_id_ = std::max(next_keyframe_id_, keyframe_id);
@@ -102,7 +106,7 @@ class Tracker {
                                                       const std::vector<Match>& matches) const;
   map::Keyframe MakeKeyframe(double timestamp, features::StereoFeatures features,
                              const Eigen::Isometry3d& T_world_camera,
-                             const std::vector<Match>& inlier_matches, bool starts_new_map);
+                             const std::vector<Match>& inlier_matches, bool starts_new_segment);
   void StartMap(double timestamp, features::StereoFeatures features,
                 const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
   // The exit of a frame that could not be tracked against a map (there is none, or tracking
@@ -137,6 +141,7 @@ class Tracker {
   bool had_map_ = false;
 
   bool has_last_ = false;
+  Eigen::Isometry3d start_pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();  // T_previous_current
   double last_timestamp_ = 0;

@@ -75,7 +75,10 @@ class StereoFrontEnd {
                                    cv::Mat* place_descriptors) const;
   void ApplyUpdate(const map::KeyframeUpdate& update) { tracker_.ApplyUpdate(update); }
   void Reset() { tracker_.Reset(); }
-  void StartNewMap() { tracker_.StartNewMap(); }
+  void SetStartPose(const Eigen::Isometry3d& T_odom_camera) {
+    tracker_.SetStartPose(T_odom_camera);
+  }
+  void StartNewLocalMap() { tracker_.StartNewLocalMap(); }
   void SkipIdsBelow(std::int64_t keyframe_id, std::int64_t point_id) {
     tracker_.SkipIdsBelow(keyframe_id, point_id);
   }

@@ -93,6 +93,8 @@ class LoopDetector {
     database_.UpdatePose(id, T_odom_camera);
   }
   const map::KeyframeDatabase& database() const { return database_; }
+  // The camera and descriptors its verification works with.
+  const GeometricVerifier& verifier() const { return verifier_; }
 
  private:
   // A query of segment -1 (not stored) has no odometry to check the verified pose against.

@@ -1,0 +1,104 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/map/keyframe_update.h"
+#include "stereo_fabmap_slam/pipeline/input_monitor.h"
+#include "stereo_fabmap_slam/pipeline/map_state.h"
+#include "stereo_fabmap_slam/pipeline/place_stage.h"
+#include "stereo_fabmap_slam/pipeline/relocalization_policy.h"
+#include "stereo_fabmap_slam/pipeline/slam_mode.h"
+#include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+
+namespace stereo_fabmap_slam::pipeline {
+
+// One stereo pair as a driver hands it over.
+struct StereoPair {
+  double timestamp = 0;  // [s]
+  cv::Mat left, right;   // raw (unrectified) mono8 images of the calibrated size
+  // Its place in the stream of pairs (1, 2, ...): pairs the driver passed over leave gaps, which
+  // tell the tracker how far apart its frames are (Tracker::Track's frames_skipped).
+  std::uint64_t arrival = 0;
+};
+
+struct TrackingOutput {
+  bool tracked = false;  // false: the input monitor refused the pair (events say why)
+  odometry::TrackingResult tracking;
+  FrameTiming timing;
+  std::vector<InputEvent> events;
+  // Ask the place stage this, then hand its answer to OnRelocalization.
+  std::optional<RelocalizationRequest> relocalization;
+  // A relocalization was due or asked for, but the frame has no pose to find: why. When the
+  // user had asked, `user` is the answer for the user.
+  std::string relocalization_failure;
+  std::optional<UserRelocalization> user;
+};
+
+// The tracking stage (the StereoTracker nodelet; run in order by StereoSlam): the input monitor,
+// the front end (rectification, stereo features, tracking against the local map, keyframe
+// decisions), and the relocalization policy that asks the place stage to find the camera in the
+// map. Tracks in odom; knows the map only through MapState. The clock (milliseconds) is only
+// read to fill the timings.
+class TrackingStage {
+ public:
+  using Clock = StereoFrontEnd::Clock;
+
+  // Relocalization is asked only with place recognition on (options.place_features), every
+  // `attempt_every_n_frames`-th frame while recovering.
+  TrackingStage(const FrontEndOptions& options, const camera::StereoRectifier& rectifier,
+                const InputMonitorOptions& input, int attempt_every_n_frames, Clock clock);
+  // The camera's pose in odom at the first frame (Tracker::SetStartPose): the nodelet's odom is
+  // the base's frame at the first frame, so its camera starts at its mounting.
+  void SetStartPose(const Eigen::Isometry3d& T_odom_camera) {
+    front_end_.SetStartPose(T_odom_camera);
+  }
+  // Another recovery rate (before the first frame).
+  void SetAttemptEveryNFrames(int n) { policy_ = RelocalizationPolicy(n); }
+
+  // One stereo pair: checked, tracked, and, if one is due, the relocalization request made.
+  // `map`: what the mapping stage says of the map (null without loop closing).
+  TrackingOutput Process(const StereoPair& pair, const MapState* map);
+  RelocalizationOutcome OnRelocalization(const RelocalizationRequest& request,
+                                         const RelocalizationAnswer& answer) {
+    return policy_.OnAnswer(request, answer);
+  }
+
+  // The bundle adjustment's corrections of the local map (MappedKeyframe::update).
+  void ApplyUpdate(const map::KeyframeUpdate& update) { front_end_.ApplyUpdate(update); }
+  // A map was loaded: the odometry goes on in a new local map, continuous in odom, numbered
+  // above the map's keyframes and points, and is found in the map by relocalization.
+  void OnMapLoaded(const LoadedMap& loaded);
+  void SetMode(SlamMode mode, bool map_has_keyframes) { policy_.SetMode(mode, map_has_keyframes); }
+  // The relocalize service: the next frame is found in the map; `reanchor` (mapping) corrects
+  // map -> odom by it even while tracking is fine.
+  void RequestRelocalization(bool reanchor) { policy_.RequestFromUser(reanchor); }
+  void CancelRelocalizationRequest() { policy_.CancelUserRequest(); }
+
+  // Whether the last frame had a pose in the map, and that pose in localization mode.
+  bool on_map() const { return policy_.on_map(); }
+  std::optional<Eigen::Isometry3d> T_map_camera() const { return policy_.T_map_camera(); }
+  const RelocalizationPolicy& policy() const { return policy_; }
+
+  // The driver's view of the input (single images, skipped pairs).
+  InputMonitor& input() { return input_; }
+  const InputMonitor& input() const { return input_; }
+  const StereoFrontEnd& front_end() const { return front_end_; }
+  const geometry::StereoCamera& camera() const { return front_end_.camera(); }
+  bool places() const { return places_; }
+
+ private:
+  StereoFrontEnd front_end_;
+  InputMonitor input_;
+  RelocalizationPolicy policy_;
+  Clock clock_;
+  bool places_;  // place descriptors are made: relocalization can be asked
+};
+
+}  // namespace stereo_fabmap_slam::pipeline

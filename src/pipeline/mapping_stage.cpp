@@ -1,0 +1,221 @@
+#include "stereo_fabmap_slam/pipeline/mapping_stage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "stereo_fabmap_slam/io/input_error.h"
+
+namespace stereo_fabmap_slam::pipeline {
+namespace {
+
+bool SameCamera(const geometry::StereoCamera& a, const geometry::StereoCamera& b) {
+  const auto near = [](double x, double y) { return std::abs(x - y) <= 1e-6 * std::abs(y); };
+  return a.size == b.size && near(a.fx, b.fx) && near(a.fy, b.fy) && near(a.cx, b.cx) &&
+         near(a.cy, b.cy) && near(a.baseline, b.baseline);
+}
+
+// The pose graph of a saved map: its keyframes (odometry poses and segments), its loop and
+// relocalization edges, and its optimised map poses.
+backend::PoseGraph RestorePoseGraph(const map::SavedMap& saved,
+                                    const backend::PoseGraphOptions& options) {
+  backend::PoseGraph graph(options);
+  try {
+    for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+      graph.AddKeyframe(keyframe.keyframe.id, keyframe.keyframe.T_world_camera,
+                        keyframe.keyframe.starts_new_segment);
+    }
+    for (const map::SavedEdge& edge : saved.edges) {
+      graph.AddLoop(edge.edge, edge.relocalization ? backend::PoseGraphEdgeType::kRelocalization
+                                                   : backend::PoseGraphEdgeType::kLoop);
+    }
+    for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+      graph.RestoreMapPose(keyframe.keyframe.id, keyframe.T_map_camera);
+    }
+  } catch (const std::invalid_argument& error) {
+    throw io::InputError(std::string("the map is inconsistent: ") + error.what());
+  }
+  return graph;
+}
+
+}  // namespace
+
+MappingStage::MappingStage(const backend::BundleAdjustmentOptions& bundle_adjustment,
+                           const backend::PoseGraphOptions& pose_graph, Clock clock)
+    : bundle_adjustment_options_(bundle_adjustment),
+      pose_graph_options_(pose_graph),
+      clock_(std::move(clock)),
+      graph_(pose_graph) {}
+
+MappedKeyframe MappingStage::AddKeyframe(const map::Keyframe& keyframe,
+                                         const geometry::StereoCamera& camera, bool optimise) {
+  MappedKeyframe mapped;
+  mapped.keyframe_id = keyframe.id;
+  mapped.timestamp = keyframe.timestamp;
+  // Made before a loaded map replaced this run's: its id may be one of the map's, and its points
+  // are of a local map the tracker has cleared.
+  if (keyframe.id < loaded_below_) {
+    last_closed_keyframe_ = std::max(last_closed_keyframe_, keyframe.id);
+    return mapped;
+  }
+  if (camera_ && !SameCamera(camera, *camera_)) {
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe.id) +
+                                " was measured with another camera than the map's");
+  }
+  if (!bundle_adjuster_) {
+    camera_ = camera;
+    bundle_adjuster_.emplace(bundle_adjustment_options_, camera);
+  }
+  double start = clock_();
+  mapped.update = bundle_adjuster_->AddKeyframe(keyframe, optimise);
+  mapped.bundle_adjustment_ms = clock_() - start;
+  if (mode_ != SlamMode::kMapping || keyframe.id <= graph_.last_id()) {
+    // Not in the graph: no place, so no loop detection to wait for.
+    last_closed_keyframe_ = std::max(last_closed_keyframe_, keyframe.id);
+    return mapped;
+  }
+
+  // The window's corrections of older keyframes first, then the keyframe at its adjusted pose,
+  // so that its map pose continues from its predecessor's corrected one.
+  Eigen::Isometry3d T_odom_camera = keyframe.T_world_camera;
+  for (const auto& [id, pose] : mapped.update.keyframe_poses) {
+    if (id == keyframe.id) {
+      T_odom_camera = pose;
+    } else if (graph_.Contains(id)) {
+      graph_.UpdateOdometryPose(id, pose);
+    }
+  }
+  mapped.starts_new_segment = keyframe.starts_new_segment || next_starts_new_segment_;
+  next_starts_new_segment_ = false;
+  graph_.AddKeyframe(keyframe.id, T_odom_camera, mapped.starts_new_segment);
+  mapped.in_map_graph = true;
+  start = clock_();
+  if (AddReadyEdges()) {
+    Optimise();
+    mapped.pose_graph_ms = clock_() - start;
+  }
+  return mapped;
+}
+
+double MappingStage::AddEdge(const map::LoopEdge& edge, backend::PoseGraphEdgeType type) {
+  if (type == backend::PoseGraphEdgeType::kRelocalization) ++relocalization_edges_received_;
+  waiting_edges_.push_back({edge, type});
+  const double start = clock_();
+  if (!AddReadyEdges()) return 0;
+  Optimise();
+  return clock_() - start;
+}
+
+double MappingStage::ApplyLoopDetection(std::int64_t keyframe_id,
+                                        const std::optional<map::LoopEdge>& loop) {
+  last_closed_keyframe_ = std::max(last_closed_keyframe_, keyframe_id);
+  return loop ? AddEdge(*loop, backend::PoseGraphEdgeType::kLoop) : 0.0;
+}
+
+bool MappingStage::AddReadyEdges() {
+  bool added = false;
+  for (auto it = waiting_edges_.begin(); it != waiting_edges_.end();) {
+    const std::int64_t a = it->edge.query_id, b = it->edge.match_id;
+    const bool ready = graph_.Contains(a) && graph_.Contains(b);
+    // Keyframes arrive in order of id: one older than the newest that the graph lacks was
+    // dropped (made before a load, or in localization mode) and never comes.
+    const bool never = (!graph_.Contains(a) && a <= graph_.last_id()) ||
+                       (!graph_.Contains(b) && b <= graph_.last_id());
+    if (!ready && !never) {
+      ++it;
+      continue;
+    }
+    const WaitingEdge edge = *it;
+    it = waiting_edges_.erase(it);
+    if (!ready) continue;
+    try {
+      graph_.AddLoop(edge.edge, edge.type);
+      added = true;
+    } catch (const std::invalid_argument& error) {
+      refused_edges_.push_back("edge " + std::to_string(edge.edge.query_id) + " -> " +
+                               std::to_string(edge.edge.match_id) + " refused: " + error.what());
+    }
+  }
+  return added;
+}
+
+std::vector<std::string> MappingStage::TakeRefusedEdges() {
+  std::vector<std::string> refused;
+  refused.swap(refused_edges_);
+  return refused;
+}
+
+double MappingStage::Optimise() {
+  const double start = clock_();
+  last_optimisation_ = graph_.Optimize();
+  ++optimisations_;
+  return clock_() - start;
+}
+
+void MappingStage::SetMode(SlamMode mode) {
+  if (mode_ == SlamMode::kLocalization && mode == SlamMode::kMapping) {
+    next_starts_new_segment_ = true;
+    localization_correction_.reset();
+  }
+  mode_ = mode;
+}
+
+void MappingStage::SetLocalizationCorrection(const Eigen::Isometry3d& T_map_odom) {
+  if (mode_ == SlamMode::kLocalization) localization_correction_ = T_map_odom;
+}
+
+void MappingStage::Load(const map::SavedMap& saved) {
+  backend::PoseGraph graph = RestorePoseGraph(saved, pose_graph_options_);
+  graph_ = std::move(graph);
+  waiting_edges_.clear();
+  bundle_adjuster_.reset();
+  camera_ = saved.camera;  // keyframes of another camera are refused from now on
+  localization_correction_.reset();
+  next_starts_new_segment_ = true;
+  for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+    loaded_below_ = std::max(loaded_below_, keyframe.keyframe.id + 1);
+  }
+  last_closed_keyframe_ = std::max(last_closed_keyframe_, loaded_below_ - 1);
+}
+
+void MappingStage::CheckGraph(const map::SavedMap& saved) {
+  // Rebuilding does not depend on the optimisation's options.
+  RestorePoseGraph(saved, backend::PoseGraphOptions());
+}
+
+Eigen::Isometry3d MappingStage::MapPose(std::int64_t id) const {
+  if (!graph_.Contains(id)) {
+    throw std::out_of_range("keyframe " + std::to_string(id) + " is not in the map");
+  }
+  return graph_.MapPose(id);
+}
+
+Eigen::Isometry3d MappingStage::MapToOdom() const {
+  if (mode_ == SlamMode::kLocalization && localization_correction_) {
+    return *localization_correction_;
+  }
+  return graph_.MapToOdom();
+}
+
+std::vector<backend::PoseGraphEdge> MappingStage::LoopEdges() const {
+  std::vector<backend::PoseGraphEdge> edges = graph_.Edges();
+  edges.erase(std::remove_if(edges.begin(), edges.end(),
+                             [](const backend::PoseGraphEdge& edge) {
+                               return edge.type == backend::PoseGraphEdgeType::kOdometry;
+                             }),
+              edges.end());
+  return edges;
+}
+
+MapSnapshot MappingStage::Snapshot() const {
+  MapSnapshot snapshot;
+  for (const auto& [id, pose] : graph_.MapPoses()) {
+    snapshot.keyframes[id] = {pose, graph_.InMap(id)};
+  }
+  snapshot.loop_edges = LoopEdges();
+  snapshot.T_map_odom = MapToOdom();
+  return snapshot;
+}
+
+}  // namespace stereo_fabmap_slam::pipeline

@@ -1,0 +1,63 @@
+#include "stereo_fabmap_slam/pipeline/tracking_stage.h"
+
+namespace stereo_fabmap_slam::pipeline {
+
+TrackingStage::TrackingStage(const FrontEndOptions& options,
+                             const camera::StereoRectifier& rectifier,
+                             const InputMonitorOptions& input, int attempt_every_n_frames,
+                             Clock clock)
+    : front_end_(options, rectifier, clock),
+      input_(input, rectifier.camera().size),
+      policy_(attempt_every_n_frames),
+      clock_(std::move(clock)),
+      places_(options.place_features.has_value()) {}
+
+TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* map) {
+  TrackingOutput output;
+  InputMonitor::Verdict verdict =
+      input_.CheckPair(pair.timestamp, pair.left, pair.right, pair.arrival);
+  output.events = std::move(verdict.events);
+  if (!verdict.track) return output;
+  if (verdict.reset) {
+    front_end_.Reset();
+    policy_.OnReset();
+  }
+  FrontEndOutput tracked =
+      front_end_.Process(pair.timestamp, pair.left, pair.right, verdict.frames_skipped);
+  output.tracked = true;
+  output.timing = tracked.timing;
+  output.tracking = std::move(tracked.tracking);
+  if (!places_ || map == nullptr) return output;
+
+  const odometry::TrackingResult& result = output.tracking;
+  const RelocalizationPolicy::Decision decision = policy_.Decide(result, !map->empty());
+  if (!decision.failure.empty()) {
+    output.relocalization_failure = decision.failure;
+    if (decision.from_user) output.user = policy_.FailUserRequest(decision.failure);
+  }
+  if (!decision.ask) return output;
+  RelocalizationRequest request;
+  const double start = clock_();
+  request.place_descriptors =
+      result.keyframe ? result.keyframe->place_descriptors : front_end_.DescribeLastFrame();
+  request.describe_ms = clock_() - start;
+  request.timestamp = pair.timestamp;
+  request.features = std::move(tracked.features);
+  request.scope = decision.scope;
+  request.reference_keyframe = result.reference_keyframe;
+  request.T_reference_camera = result.T_keyframe_camera;
+  request.T_odom_camera = result.T_world_camera;
+  request.add_edge = decision.add_edge;
+  request.from_user = decision.from_user;
+  output.relocalization = std::move(request);
+  return output;
+}
+
+void TrackingStage::OnMapLoaded(const LoadedMap& loaded) {
+  // This run's keyframes so far may share the map's ids: a new local map, numbered above it.
+  front_end_.StartNewLocalMap();
+  front_end_.SkipIdsBelow(loaded.next_keyframe_id, loaded.next_point_id);
+  policy_.OnMapLoaded();
+}
+
+}  // namespace stereo_fabmap_slam::pipeline

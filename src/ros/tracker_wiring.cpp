@@ -1,0 +1,236 @@
+#include "tracker_wiring.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <ros/console.h>
+
+#include "parameter_reader.h"
+#include "ros_conversions.h"
+#include "stage_conversions.h"
+#include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_image_input.h"
+
+namespace stereo_fabmap_slam::ros_wiring {
+
+double WallSeconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+double SteadyMilliseconds() {
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+TrackerParameters ReadTrackerParameters(const ros::NodeHandle& private_node) {
+  // A configuration file first (config/euroc.yaml and its presets), then single private
+  // parameters "~<section>/<key>" on top; a bad value stops start-up with its name.
+  TrackerParameters p;
+  p.rectification = ros_parameters::ReadModuleOptions(private_node, p.rectification);
+  p.printed += ros_parameters::PrintedOptions(p.rectification);
+  p.options.ForEachModule([&](auto& options) {
+    options = ros_parameters::ReadModuleOptions(private_node, options);
+    p.printed += ros_parameters::PrintedOptions(options);
+  });
+  p.relocalizer = ros_parameters::ReadModuleOptions(private_node, p.relocalizer);
+  p.printed += ros_parameters::PrintedOptions(p.relocalizer);
+  p.loop_closing = private_node.param("loop_closing", true);
+  // Loop closing needs place descriptors in every keyframe, with place recognition's own key
+  // point selection (config/fabmap.yaml).
+  if (p.loop_closing) {
+    std::string fabmap_config;
+    if (!private_node.getParam("fabmap_config", fabmap_config)) {
+      throw std::invalid_argument(
+          "set ~fabmap_config (e.g. config/fabmap.yaml) or ~loop_closing false");
+    }
+    p.options.place_features =
+        place_recognition::LoadPlaceRecognitionOptions(fabmap_config, p.options.features).features;
+    p.printed += "place recognition features from " + fabmap_config + "\n";
+  }
+  // REP-105 names, as rtabmap_ros and slam_toolbox default to.
+  p.odom_frame = private_node.param<std::string>("odom_frame", p.odom_frame);
+  p.base_frame = private_node.param<std::string>("base_frame", p.base_frame);
+  p.camera_frame = private_node.param<std::string>("camera_frame", p.camera_frame);
+  p.map_frame = private_node.param<std::string>("map_frame", p.map_frame);
+  p.publish_tf = private_node.param("publish_tf", p.publish_tf);
+  p.use_camera_info = private_node.param("use_camera_info", p.use_camera_info);
+  p.approximate_sync = private_node.param("approximate_sync", p.approximate_sync);
+  p.lockstep = private_node.param("lockstep", p.lockstep);
+  p.queue_size = private_node.param("queue_size", p.queue_size);
+  if (p.queue_size < 1) throw std::invalid_argument("~queue_size must be >= 1");
+  p.base_to_camera = ros_input::ReadBaseToCamera(private_node);
+  if (!p.use_camera_info && !private_node.getParam("calibration_file", p.calibration_file)) {
+    throw std::invalid_argument(
+        "set ~calibration_file (e.g. config/euroc_stereo.yaml) or ~use_camera_info");
+  }
+  return p;
+}
+
+std::string ImageRefusal(const sensor_msgs::Image& left, const sensor_msgs::Image& right) {
+  for (const sensor_msgs::Image* image : {&left, &right}) {
+    const std::string problem = ros_conversions::MalformedImageReason(*image);
+    if (!problem.empty()) {
+      return std::string("malformed image on ") + (image == &left ? "left" : "right") +
+             "/image_raw: " + problem;
+    }
+  }
+  return "";
+}
+
+void EventLog::Log(const pipeline::InputEvent& event) {
+  if (event.repeats) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const double now = WallSeconds();
+    const auto key =
+        std::make_pair(event.kind, event.message.substr(0, event.message.find_first_of(":(")));
+    const auto it = last_logged_.find(key);
+    if (it != last_logged_.end() && now - it->second < 2.0) return;
+    last_logged_[key] = now;
+  }
+  if (event.warning) {
+    ROS_WARN("[%s] %s", name_.c_str(), event.message.c_str());
+  } else {
+    ROS_INFO("[%s] %s", name_.c_str(), event.message.c_str());
+  }
+}
+
+void PairQueue::Configure(std::size_t capacity, double catch_up_gap) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  queue_.emplace(capacity, catch_up_gap);
+}
+
+void PairQueue::SetMonitor(pipeline::InputMonitor* monitor) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  monitor_ = monitor;
+}
+
+pipeline::InputMonitor* PairQueue::monitor() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return monitor_;
+}
+
+std::vector<pipeline::InputEvent> PairQueue::Push(const sensor_msgs::ImageConstPtr& left,
+                                                  const sensor_msgs::ImageConstPtr& right) {
+  std::vector<pipeline::InputEvent> events;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::uint64_t arrival = ++arrivals_;
+    if (monitor_ != nullptr) events = monitor_->OnPair(WallSeconds());
+    // A full queue drops the newest pair: what waits stays a contiguous stretch of the stream.
+    if (!queue_->Push(left->header.stamp.toSec(), ImagePair{left, right, arrival}) &&
+        monitor_ != nullptr) {
+      monitor_->CountSkipped(1);
+    }
+    if (monitor_ != nullptr) {
+      if (auto report = monitor_->SkipReport(WallSeconds(), last_frame_ms_)) {
+        events.push_back(*report);
+      }
+    }
+  }
+  ready_.notify_one();
+  return events;
+}
+
+std::optional<ImagePair> PairQueue::Take(std::vector<pipeline::InputEvent>* events) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stopping_ && queue_->empty()) {
+    // Idle with skips not yet reported (the stream ended or paused): report them when their
+    // second is up rather than never.
+    if (monitor_ == nullptr || !monitor_->HasUnreportedSkips()) {
+      ready_.wait(lock);
+      continue;
+    }
+    const double wait = monitor_->NextSkipReport() - WallSeconds();
+    if (wait > 0) ready_.wait_for(lock, std::chrono::duration<double>(wait));
+    if (auto report = monitor_->SkipReport(WallSeconds(), last_frame_ms_)) {
+      events->push_back(*report);
+    }
+  }
+  if (stopping_) return std::nullopt;
+  odometry::FrameQueue<ImagePair>::Taken taken = queue_->Take();
+  if (monitor_ != nullptr) monitor_->CountSkipped(taken.skipped);
+  return std::move(taken.frame);
+}
+
+void PairQueue::FrameDone(double milliseconds) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  last_frame_ms_ = milliseconds;
+}
+
+void PairQueue::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  ready_.notify_all();
+}
+
+void MappingProgress::OnGraph(const stereo_fabmap_slam::MapGraph& graph) {
+  auto snapshot =
+      std::make_shared<pipeline::MapSnapshot>(ros_conversions::FromMapGraphMessage(graph));
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    snapshot_ = std::move(snapshot);
+    last_closed_ = std::max(last_closed_, graph.last_closed_keyframe_id);
+    relocalization_edges_ =
+        std::max<std::uint64_t>(relocalization_edges_, graph.relocalization_edges_received);
+  }
+  changed_.notify_all();
+}
+
+void MappingProgress::OnUpdate(std::int64_t keyframe_id) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_update_ = std::max(last_update_, keyframe_id);
+  }
+  changed_.notify_all();
+}
+
+std::shared_ptr<const pipeline::MapSnapshot> MappingProgress::Snapshot() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return snapshot_;
+}
+
+bool MappingProgress::WaitFor(std::int64_t keyframe, bool loop_closing,
+                              std::uint64_t relocalization_edges, double timeout) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return changed_.wait_for(lock, std::chrono::duration<double>(timeout), [&] {
+    return last_update_ >= keyframe && (!loop_closing || last_closed_ >= keyframe) &&
+           relocalization_edges_ >= relocalization_edges;
+  });
+}
+
+std::optional<pipeline::UserRelocalization> UserRequests::Ask(double timeout,
+                                                              const std::function<void()>& post,
+                                                              const std::function<void()>& cancel) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (waiting_) {
+    pipeline::UserRelocalization busy;
+    busy.message = "another relocalize call is waiting for a frame";
+    return busy;
+  }
+  waiting_ = true;
+  answer_.reset();
+  post();
+  const bool answered = answered_.wait_for(lock, std::chrono::duration<double>(timeout),
+                                           [&] { return answer_.has_value(); });
+  waiting_ = false;
+  if (!answered) {
+    cancel();
+    return std::nullopt;
+  }
+  return answer_;
+}
+
+void UserRequests::Answer(const pipeline::UserRelocalization& answer) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!waiting_) return;  // its caller gave up
+    answer_ = answer;
+  }
+  answered_.notify_all();
+}
+
+}  // namespace stereo_fabmap_slam::ros_wiring

@@ -1,0 +1,162 @@
+// The mapping stage's own rules, which the offline runner and the Backend nodelet share: edges
+// that arrive before their keyframes wait for them, keyframes from before a loaded map are
+// dropped and the next one starts a segment, localization mode leaves the graph as it is, the
+// keyframes' rig is checked, and what the other stages are told of the map (MapState) is the
+// pose graph's.
+#include "stereo_fabmap_slam/pipeline/mapping_stage.h"
+
+#include <gtest/gtest.h>
+
+#include "stereo_fabmap_slam/geometry/relative_pose_error.h"
+#include "stereo_fabmap_slam/io/input_error.h"
+#include "stereo_world.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+class MappingStageTest : public ::testing::Test {
+ protected:
+  MappingStageTest()
+      : stage_(backend::BundleAdjustmentOptions(), backend::PoseGraphOptions(),
+               [] { return 0.0; }) {
+    world_.Add(RandomPoints(300, 3), 5);
+  }
+
+  // Keyframe `id` of a camera moving 10 cm a keyframe along x, seeing the same points (new
+  // point ids each time: the window has nothing to adjust but the poses it was given).
+  map::Keyframe Keyframe(std::int64_t id, bool starts_new_segment = false) const {
+    map::Keyframe keyframe;
+    keyframe.id = id;
+    keyframe.timestamp = 0.5 * id;
+    keyframe.T_world_camera = Eigen::Isometry3d(Eigen::Translation3d(0.1 * id, 0, 0));
+    keyframe.starts_new_segment = starts_new_segment;
+    keyframe.features = Observe(world_, keyframe.T_world_camera);
+    keyframe.map_point_ids.resize(keyframe.features.size());
+    for (std::size_t k = 0; k < keyframe.map_point_ids.size(); ++k) {
+      keyframe.map_point_ids[k] = 1000 * id + static_cast<std::int64_t>(k);
+    }
+    return keyframe;
+  }
+
+  static map::LoopEdge Edge(std::int64_t match, std::int64_t query, double dx) {
+    map::LoopEdge edge;
+    edge.match_id = match;
+    edge.query_id = query;
+    edge.T_match_query = Eigen::Isometry3d(Eigen::Translation3d(dx, 0, 0));
+    edge.information = geometry::DiagonalPoseInformation(0.02, 0.2);
+    return edge;
+  }
+
+  StereoWorld world_;
+  pipeline::MappingStage stage_;
+};
+
+TEST_F(MappingStageTest, KeyframesJoinTheGraphAndTheMapIsTheFirstOnesPiece) {
+  for (std::int64_t id = 0; id < 3; ++id) {
+    const pipeline::MappedKeyframe mapped = stage_.AddKeyframe(Keyframe(id), kTestCamera);
+    EXPECT_TRUE(mapped.in_map_graph);
+    EXPECT_EQ(mapped.keyframe_id, id);
+  }
+  const pipeline::MappedKeyframe lost = stage_.AddKeyframe(Keyframe(3, true), kTestCamera);
+  EXPECT_TRUE(lost.starts_new_segment);
+  EXPECT_TRUE(stage_.InMap(2));
+  EXPECT_FALSE(stage_.InMap(3)) << "a new segment is a piece of its own";
+  EXPECT_FALSE(stage_.InMap(99)) << "a keyframe the map does not hold";
+  // The snapshot the nodelets pass around says the same.
+  const pipeline::MapSnapshot snapshot = stage_.Snapshot();
+  EXPECT_TRUE(snapshot.InMap(2));
+  EXPECT_FALSE(snapshot.InMap(3));
+  EXPECT_TRUE(snapshot.MapPose(2).isApprox(stage_.MapPose(2)));
+  EXPECT_THROW(stage_.MapPose(99), std::out_of_range);
+}
+
+TEST_F(MappingStageTest, AnEdgeWaitsForItsKeyframesThenJoinsTheSegments) {
+  stage_.AddKeyframe(Keyframe(0), kTestCamera);
+  stage_.AddKeyframe(Keyframe(1), kTestCamera);
+  // The place stage is ahead of the bundle adjustment: the edge's query is not mapped yet.
+  EXPECT_EQ(stage_.AddEdge(Edge(0, 2, 0.2), backend::PoseGraphEdgeType::kRelocalization), 0.0);
+  EXPECT_EQ(stage_.waiting_edges(), 1u);
+  EXPECT_EQ(stage_.relocalization_edges_received(), 1u);
+  const std::uint64_t optimisations = stage_.optimisations();
+  stage_.AddKeyframe(Keyframe(2, true), kTestCamera);
+  EXPECT_EQ(stage_.waiting_edges(), 0u);
+  EXPECT_GT(stage_.optimisations(), optimisations);
+  EXPECT_TRUE(stage_.InMap(2)) << "the edge joined the new segment to the map";
+  EXPECT_EQ(stage_.LoopEdges().size(), 1u);
+}
+
+TEST_F(MappingStageTest, AnEdgeToAKeyframeThatNeverComesIsDropped) {
+  for (std::int64_t id : {0, 1, 3}) stage_.AddKeyframe(Keyframe(id), kTestCamera);
+  // Keyframe 2 never joined (ids come in order: it never will).
+  stage_.AddEdge(Edge(0, 2, 0.2), backend::PoseGraphEdgeType::kLoop);
+  EXPECT_EQ(stage_.waiting_edges(), 0u);
+  EXPECT_TRUE(stage_.LoopEdges().empty());
+  // An edge the graph refuses is said so, not thrown at the driver.
+  stage_.AddEdge(Edge(1, 1, 0.0), backend::PoseGraphEdgeType::kLoop);
+  EXPECT_EQ(stage_.TakeRefusedEdges().size(), 1u);
+}
+
+TEST_F(MappingStageTest, LoopDetectionsCloseKeyframesAndKeyframesWithoutOneAreClosedAtOnce) {
+  stage_.AddKeyframe(Keyframe(0), kTestCamera);
+  EXPECT_EQ(stage_.last_closed_keyframe(), -1) << "a place: its loop detection is to come";
+  stage_.ApplyLoopDetection(0, std::nullopt);
+  EXPECT_EQ(stage_.last_closed_keyframe(), 0);
+  stage_.SetMode(pipeline::SlamMode::kLocalization);
+  const pipeline::MappedKeyframe localized = stage_.AddKeyframe(Keyframe(1), kTestCamera);
+  EXPECT_FALSE(localized.in_map_graph) << "localization does not extend the map";
+  EXPECT_EQ(stage_.last_closed_keyframe(), 1) << "no place, nothing to wait for";
+  EXPECT_EQ(stage_.pose_graph().size(), 1u);
+}
+
+TEST_F(MappingStageTest, LocalizationsMapToOdomIsTheTrackersAndMappingStartsASegmentAfter) {
+  stage_.AddKeyframe(Keyframe(0), kTestCamera);
+  stage_.SetMode(pipeline::SlamMode::kLocalization);
+  const Eigen::Isometry3d correction(Eigen::Translation3d(1, 2, 3));
+  stage_.SetLocalizationCorrection(correction);
+  EXPECT_TRUE(stage_.MapToOdom().isApprox(correction));
+  stage_.AddKeyframe(Keyframe(1), kTestCamera);
+  stage_.SetMode(pipeline::SlamMode::kMapping);
+  EXPECT_TRUE(stage_.MapToOdom().isApprox(Eigen::Isometry3d::Identity()));
+  const pipeline::MappedKeyframe back = stage_.AddKeyframe(Keyframe(2), kTestCamera);
+  EXPECT_TRUE(back.in_map_graph);
+  EXPECT_TRUE(back.starts_new_segment) << "the keyframes in between are not in the graph";
+  EXPECT_FALSE(stage_.InMap(2));
+}
+
+TEST_F(MappingStageTest, ALoadedMapDropsOlderKeyframesAndTheNextStartsASegment) {
+  map::SavedMap saved;
+  saved.camera = kTestCamera;
+  for (std::int64_t id = 0; id < 5; ++id) {
+    map::SavedKeyframe keyframe;
+    keyframe.keyframe.id = id;
+    keyframe.keyframe.T_world_camera = Eigen::Isometry3d(Eigen::Translation3d(0.1 * id, 0, 0));
+    keyframe.T_map_camera = keyframe.keyframe.T_world_camera;
+    saved.keyframes.push_back(keyframe);
+  }
+  stage_.Load(saved);
+  EXPECT_EQ(stage_.loaded_below(), 5);
+  EXPECT_EQ(stage_.last_closed_keyframe(), 4);
+  const pipeline::MappedKeyframe before = stage_.AddKeyframe(Keyframe(3), kTestCamera);
+  EXPECT_FALSE(before.in_map_graph) << "made before the load: its id is the map's";
+  EXPECT_TRUE(before.update.keyframe_poses.empty());
+  const pipeline::MappedKeyframe next = stage_.AddKeyframe(Keyframe(5), kTestCamera);
+  EXPECT_TRUE(next.in_map_graph);
+  EXPECT_TRUE(next.starts_new_segment);
+  EXPECT_TRUE(stage_.InMap(4));
+  EXPECT_FALSE(stage_.InMap(5)) << "found in the loaded map only by relocalization or a loop";
+
+  // A keyframe of another rig than the map's is refused.
+  geometry::StereoCamera other = kTestCamera;
+  other.baseline *= 1.5;
+  EXPECT_THROW(stage_.AddKeyframe(Keyframe(6), other), std::invalid_argument);
+
+  // A map whose graph cannot be rebuilt is refused and changes nothing.
+  map::SavedMap broken = saved;
+  broken.edges.push_back({Edge(2, 2, 0.0), false});
+  EXPECT_THROW(pipeline::MappingStage::CheckGraph(broken), io::InputError);
+  EXPECT_THROW(stage_.Load(broken), io::InputError);
+  EXPECT_EQ(stage_.pose_graph().size(), 6u);
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test

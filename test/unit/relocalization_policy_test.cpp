@@ -1,0 +1,225 @@
+// When the tracking stage asks the place stage to find the camera in the map, and what it makes
+// of the answers: recovery after a break of the odometry (mapping), localization at start, after
+// a loss and at keyframes, and the relocalize service's requests. The tracker's results are
+// made up here; the policy sees nothing else.
+#include "stereo_fabmap_slam/pipeline/relocalization_policy.h"
+
+#include <gtest/gtest.h>
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+using pipeline::RelocalizationPolicy;
+using pipeline::RelocalizationRequest;
+
+odometry::TrackingResult Tracked(std::int64_t reference, bool keyframe = false,
+                                 bool new_segment = false) {
+  odometry::TrackingResult result;
+  result.state = new_segment ? odometry::TrackingState::kLost : odometry::TrackingState::kOk;
+  result.reference_keyframe = reference;
+  result.T_world_camera.translation() = Eigen::Vector3d(1, 2, 3);
+  if (keyframe || new_segment) {
+    result.keyframe.emplace();
+    result.keyframe->id = reference;
+    result.keyframe->starts_new_segment = new_segment;
+  }
+  return result;
+}
+
+odometry::TrackingResult Lost(bool map_kept) {
+  odometry::TrackingResult result;
+  result.state = odometry::TrackingState::kLost;
+  result.map_kept = map_kept;
+  return result;
+}
+
+RelocalizationRequest RequestOf(const RelocalizationPolicy::Decision& decision,
+                                const odometry::TrackingResult& result) {
+  RelocalizationRequest request;
+  request.scope = decision.scope;
+  request.add_edge = decision.add_edge;
+  request.from_user = decision.from_user;
+  request.reference_keyframe = result.reference_keyframe;
+  request.T_odom_camera = result.T_world_camera;
+  return request;
+}
+
+pipeline::RelocalizationAnswer Found(std::int64_t keyframe, const Eigen::Isometry3d& T_map_camera) {
+  pipeline::RelocalizationAnswer answer;
+  answer.result.status = relocalization::RelocalizationStatus::kSuccess;
+  answer.result.keyframe_id = keyframe;
+  answer.result.inliers = 120;
+  answer.map_pose_known = true;
+  answer.T_map_camera = T_map_camera;
+  return answer;
+}
+
+pipeline::RelocalizationAnswer NotFound() {
+  pipeline::RelocalizationAnswer answer;
+  answer.result.status = relocalization::RelocalizationStatus::kRansacFailed;
+  answer.result.reason = "RANSAC found 3 inliers";
+  return answer;
+}
+
+TEST(RelocalizationPolicy, TrackingWithoutABreakAsksNothing) {
+  RelocalizationPolicy policy(1);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_FALSE(policy.Decide(Tracked(0, i == 0), true).ask);
+    EXPECT_TRUE(policy.on_map());
+  }
+}
+
+TEST(RelocalizationPolicy, ALossStartsRecoveryInTheMapUntilFound) {
+  RelocalizationPolicy policy(1);
+  ASSERT_FALSE(policy.Decide(Tracked(0, true), true).ask);
+  // Lost with too few points to start a segment: no pose to find, nothing asked.
+  EXPECT_FALSE(policy.Decide(Lost(false), true).ask);
+  EXPECT_TRUE(policy.recovering());
+  EXPECT_FALSE(policy.on_map());
+  // The new segment's first keyframe: found among the map's keyframes, joined by an edge.
+  const odometry::TrackingResult first = Tracked(5, true, true);
+  const RelocalizationPolicy::Decision decision = policy.Decide(first, true);
+  ASSERT_TRUE(decision.ask);
+  EXPECT_EQ(decision.scope, RelocalizationRequest::Scope::kMap);
+  EXPECT_TRUE(decision.add_edge);
+  EXPECT_FALSE(decision.from_user);
+  EXPECT_FALSE(policy.OnAnswer(RequestOf(decision, first), NotFound()).news.size());
+  EXPECT_FALSE(policy.on_map());
+  // Asked again at the next frame, found.
+  const odometry::TrackingResult next = Tracked(5);
+  const RelocalizationPolicy::Decision again = policy.Decide(next, true);
+  ASSERT_TRUE(again.ask);
+  const pipeline::RelocalizationOutcome outcome =
+      policy.OnAnswer(RequestOf(again, next), Found(1, Eigen::Isometry3d::Identity()));
+  EXPECT_NE(outcome.news.find("found in the map again after tracking loss against keyframe 1"),
+            std::string::npos)
+      << outcome.news;
+  EXPECT_FALSE(outcome.T_map_odom.has_value()) << "mapping: the edge moves map -> odom";
+  EXPECT_TRUE(policy.on_map());
+  EXPECT_FALSE(policy.Decide(Tracked(5), true).ask);
+}
+
+TEST(RelocalizationPolicy, ALoopThatJoinedTheSegmentEndsRecovery) {
+  RelocalizationPolicy policy(1);
+  policy.Decide(Tracked(0, true), true);
+  const odometry::TrackingResult first = Tracked(5, true, true);
+  policy.OnAnswer(RequestOf(policy.Decide(first, true), first), NotFound());
+  const odometry::TrackingResult next = Tracked(6, true);
+  const RelocalizationPolicy::Decision decision = policy.Decide(next, true);
+  ASSERT_TRUE(decision.ask);
+  pipeline::RelocalizationAnswer joined;
+  joined.already_joined = true;
+  EXPECT_TRUE(policy.OnAnswer(RequestOf(decision, next), joined).news.empty());
+  EXPECT_TRUE(policy.on_map());
+  EXPECT_FALSE(policy.Decide(Tracked(6), true).ask);
+}
+
+TEST(RelocalizationPolicy, NothingToRecoverIntoBeforeTheMapHasKeyframes) {
+  RelocalizationPolicy policy(1);
+  EXPECT_FALSE(policy.Decide(Tracked(3, true, true), false).ask)
+      << "the first segment becomes the map";
+  EXPECT_TRUE(policy.on_map());
+}
+
+TEST(RelocalizationPolicy, RecoveryAsksEveryNthFrameWithAPose) {
+  RelocalizationPolicy policy(3);
+  policy.Decide(Tracked(0, true), true);
+  std::vector<bool> asked;
+  asked.push_back(policy.Decide(Tracked(4, true, true), true).ask);
+  policy.Decide(Lost(true), true);  // no pose: not counted
+  for (int i = 0; i < 5; ++i) asked.push_back(policy.Decide(Tracked(4), true).ask);
+  EXPECT_EQ(asked, (std::vector<bool>{true, false, false, true, false, false}));
+}
+
+TEST(RelocalizationPolicy, AResetAndALoadedMapAreNamedWhenFoundAgain) {
+  RelocalizationPolicy policy(1);
+  policy.Decide(Tracked(0, true), true);
+  policy.OnReset();
+  const odometry::TrackingResult reset = Tracked(7, true, true);
+  const auto reset_decision = policy.Decide(reset, true);
+  EXPECT_NE(policy.OnAnswer(RequestOf(reset_decision, reset), Found(0, {}))
+                .news.find("after time went backwards"),
+            std::string::npos);
+
+  policy.OnMapLoaded();
+  EXPECT_TRUE(policy.recovering()) << "this run's odometry is not in the loaded map";
+  const odometry::TrackingResult next = Tracked(40);
+  const auto decision = policy.Decide(next, true);
+  ASSERT_TRUE(decision.ask);
+  EXPECT_EQ(decision.scope, RelocalizationRequest::Scope::kMap);
+  EXPECT_NE(policy.OnAnswer(RequestOf(decision, next), Found(3, {})).news.find("loading a map"),
+            std::string::npos);
+}
+
+TEST(RelocalizationPolicy, LocalizationFindsTheCameraThenFollowsItAtKeyframes) {
+  RelocalizationPolicy policy(1);
+  policy.SetMode(pipeline::SlamMode::kLocalization, true);
+  const odometry::TrackingResult first = Tracked(0, true);
+  const RelocalizationPolicy::Decision decision = policy.Decide(first, true);
+  ASSERT_TRUE(decision.ask);
+  EXPECT_EQ(decision.scope, RelocalizationRequest::Scope::kAnywhere);
+  EXPECT_FALSE(decision.add_edge) << "localization never changes the map";
+  EXPECT_FALSE(policy.on_map());
+  Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
+  T_map_camera.translation() = Eigen::Vector3d(10, 0, 0);
+  const pipeline::RelocalizationOutcome outcome =
+      policy.OnAnswer(RequestOf(decision, first), Found(2, T_map_camera));
+  ASSERT_TRUE(outcome.T_map_odom.has_value());
+  // map -> odom takes the odometry's pose onto the map's.
+  EXPECT_TRUE((*outcome.T_map_odom * first.T_world_camera).isApprox(T_map_camera));
+  EXPECT_NE(outcome.news.find("localized in the map"), std::string::npos);
+  ASSERT_TRUE(policy.T_map_camera().has_value());
+  EXPECT_TRUE(policy.T_map_camera()->isApprox(T_map_camera));
+  EXPECT_FALSE(policy.Decide(Tracked(0), true).ask) << "localized: only keyframes are checked";
+  EXPECT_TRUE(policy.Decide(Tracked(1, true), true).ask);
+  // A break: map -> odom no longer holds; asked until found again.
+  policy.Decide(Lost(false), true);
+  EXPECT_FALSE(policy.on_map());
+  EXPECT_TRUE(policy.Decide(Tracked(9, true, true), true).ask);
+  EXPECT_TRUE(policy.Decide(Tracked(9), true).ask);
+}
+
+TEST(RelocalizationPolicy, TheEndOfLocalizationModeStartsRecovery) {
+  RelocalizationPolicy policy(1);
+  policy.SetMode(pipeline::SlamMode::kLocalization, true);
+  policy.SetMode(pipeline::SlamMode::kMapping, true);
+  EXPECT_TRUE(policy.recovering());
+  const auto decision = policy.Decide(Tracked(12), true);
+  EXPECT_TRUE(decision.ask);
+  EXPECT_TRUE(decision.add_edge);
+}
+
+TEST(RelocalizationPolicy, TheUsersRequestIsAnsweredByTheNextFrame) {
+  RelocalizationPolicy policy(1);
+  policy.Decide(Tracked(0, true), true);
+  policy.RequestFromUser(/*reanchor=*/false);
+  EXPECT_TRUE(policy.user_request_pending());
+  const odometry::TrackingResult frame = Tracked(0);
+  const RelocalizationPolicy::Decision check = policy.Decide(frame, true);
+  ASSERT_TRUE(check.ask);
+  EXPECT_TRUE(check.from_user);
+  EXPECT_EQ(check.scope, RelocalizationRequest::Scope::kAnywhere);
+  EXPECT_FALSE(check.add_edge) << "a check of the view changes nothing";
+  const pipeline::RelocalizationOutcome outcome =
+      policy.OnAnswer(RequestOf(check, frame), Found(0, Eigen::Isometry3d::Identity()));
+  ASSERT_TRUE(outcome.user.has_value());
+  EXPECT_TRUE(outcome.user->success);
+  EXPECT_EQ(outcome.user->keyframe_id, 0);
+  EXPECT_FALSE(policy.user_request_pending());
+
+  policy.RequestFromUser(/*reanchor=*/true);
+  EXPECT_TRUE(policy.Decide(frame, true).add_edge) << "re-anchoring corrects map -> odom";
+  policy.CancelUserRequest();
+
+  // A frame without a pose cannot answer: the user hears why.
+  policy.RequestFromUser(false);
+  const RelocalizationPolicy::Decision lost = policy.Decide(Lost(true), true);
+  EXPECT_FALSE(lost.ask);
+  EXPECT_TRUE(lost.from_user);
+  EXPECT_NE(policy.FailUserRequest(lost.failure).message.find("could not be tracked"),
+            std::string::npos);
+  EXPECT_FALSE(policy.user_request_pending());
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
