@@ -42,6 +42,13 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
     relocalize_service_.shutdown();  // before its queue
     pairing_.Stop();
     if (worker_.joinable()) worker_.join();
+    if (!parameters_.save_map_at_exit.empty()) {
+      stereo_fabmap_slam::MapFile::Request request;
+      stereo_fabmap_slam::MapFile::Response response;
+      request.path = parameters_.save_map_at_exit;
+      OnSaveMap(request, response);
+      ROS_INFO_STREAM("[loop_detector] ~save_map " << request.path << ": " << response.message);
+    }
   }
 
  private:

@@ -26,6 +26,7 @@ PlaceParameters ReadPlaceParameters(const ros::NodeHandle& private_node) {
   // Loaded once now, so that a missing or damaged vocabulary stops start-up.
   place_recognition::Vocabulary::Load(p.place.vocabulary_directory + "/vocabulary.bin");
   p.map_file = private_node.param<std::string>("map_file", "");
+  p.save_map_at_exit = private_node.param<std::string>("save_map", "");
   p.mode = private_node.param<std::string>("mode", "mapping");
   return p;
 }

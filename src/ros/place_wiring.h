@@ -32,6 +32,7 @@ struct PlaceParameters {
   place_recognition::LoopDetectorOptions detection;
   relocalization::RelocalizerOptions relocalizer;
   std::string map_file;          // "" or a map to load at start
+  std::string save_map_at_exit;  // "" or where to save the map when the node shuts down
   std::string mode = "mapping";  // as given; checked at start
   std::string printed;           // the options in force, for the start-up log
 };

@@ -1,15 +1,25 @@
 // A misspelt private parameter (~features/max_featurs) is refused like the same typo in YAML,
 // with the accepted keys, and the launch ends (its nodelet loaders are required) rather than
-// leaving the manager, Backend and LoopDetector running as if all were well.
+// leaving the manager, Backend and LoopDetector running as if all were well. A map file or mode
+// the LoopDetector refuses at start is another matter: the odometry runs on, the LoopDetector
+// with an empty map in mapping mode, saying so, and its services answer.
 #include <sys/wait.h>
 
 #include <cstdlib>
 #include <string>
 #include <vector>
 
-#include <gtest/gtest.h>
-#include <ros/ros.h>
+#include <atomic>
+#include <mutex>
+#include <thread>
 
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <stereo_fabmap_slam/MapFile.h>
+#include <stereo_fabmap_slam/SetMode.h>
+
+#include "euroc_bag_fixture.h"
 #include "test_support.h"
 
 namespace stereo_fabmap_slam::test {
@@ -37,6 +47,61 @@ TEST(Misconfiguration, MisspeltPrivateParameterEndsTheLaunchWithItsName) {
                        &processes),
             0)
       << processes;
+}
+
+// A damaged ~map_file and ~mode:=bogus: before, the LoopDetector threw from onInit and the
+// manager died of a segmentation fault (5 of 5 tries), taking the tracker with it.
+TEST(Misconfiguration, ARefusedMapFileOrModeLeavesTheGraphRunning) {
+  // The misspelt parameter of the test before stays on the master otherwise.
+  ros::param::del("/stereo_tracker");
+  TemporaryDirectory temp;
+  const std::string bag = temp.path() + "/mh01.bag";
+  WriteEurocSubsetBag("MH01_first10s", bag);
+  const std::string damaged = temp.path() + "/damaged.map";
+  WriteTextFile(damaged, "not a map at all");
+  std::atomic<int> odometry{0};
+  ros::NodeHandle node;
+  const ros::Subscriber subscriber = node.subscribe<nav_msgs::Odometry>(
+      "/odometry", 1000, [&](const nav_msgs::OdometryConstPtr&) { ++odometry; });
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  // The services while the bag plays: the LoopDetector is up and in mapping mode.
+  stereo_fabmap_slam::SetMode mode;
+  stereo_fabmap_slam::MapFile load;
+  std::atomic<bool> called{false};
+  std::thread caller([&] {
+    if (!ros::service::waitForService("/set_mode", ros::Duration(60))) return;
+    mode.request.mode = "mapping";
+    load.request.path = damaged;
+    called = ros::service::call("/set_mode", mode) && ros::service::call("/load_map", load);
+  });
+  const std::string log = temp.path() + "/roslaunch.log";
+  const int status =
+      std::system(("timeout 120 roslaunch --wait stereo_fabmap_slam euroc_bag.launch "
+                   "exit_at_end:=true visualizer:=false mode:=bogus map_file:=" +
+                   damaged + " bag:=" + bag + " > " + log + " 2>&1")
+                      .c_str());
+  caller.join();
+  spinner.stop();
+  const std::string output = ReadTextFile(log);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  EXPECT_NE(output.find("~mode 'bogus' is not a mode (mapping, localization): mapping"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("~map_file refused:"), std::string::npos) << output;
+  EXPECT_NE(output.find("running with an empty map in mapping mode"), std::string::npos);
+  // The bag player ends the launch (exit_at_end: it is required); nothing else ended.
+  const std::size_t died = output.find("has died");
+  ASSERT_NE(died, std::string::npos) << output;
+  EXPECT_NE(output.rfind("REQUIRED process [bag_player", died), std::string::npos) << output;
+  EXPECT_EQ(output.find("has died", died + 1), std::string::npos) << output;
+  EXPECT_GE(odometry.load(), 190) << "the odometry ran on (200 pairs)";
+  ASSERT_TRUE(called) << "the LoopDetector's services answered";
+  EXPECT_TRUE(mode.response.success) << mode.response.message;
+  EXPECT_FALSE(load.response.success);
+  EXPECT_NE(load.response.message.find("the map is unchanged"), std::string::npos)
+      << load.response.message;
 }
 
 }  // namespace
