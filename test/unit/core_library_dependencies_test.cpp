@@ -42,15 +42,33 @@ TEST(CoreLibraryDependencies, PatternRecognisesRosLibraries) {
   EXPECT_TRUE(std::regex_search(LinkedLibraries(nodelets), kRosLibrary));
 }
 
-TEST(CoreLibraryDependencies, NodeletsLinkNoDatasets) {
-  // The EuRoC reader and the synthetic world are inputs for tools and tests: a robot running the
-  // nodelets loads neither.
-  const std::string nodelets = std::filesystem::path(STEREO_FABMAP_SLAM_CORE_LIBRARY)
-                                   .replace_filename("libstereo_fabmap_slam_nodelets.so")
-                                   .string();
-  const std::string linked = LinkedLibraries(nodelets);
-  ASSERT_NE(linked.find("libstereo_fabmap_slam_core"), std::string::npos) << linked;
-  EXPECT_EQ(linked.find("libstereo_fabmap_slam_datasets"), std::string::npos) << linked;
+TEST(CoreLibraryDependencies, NodeletsLinkNoDatasetsNorEvaluation) {
+  // The EuRoC reader, the synthetic world and the evaluation are for tools and tests: a robot
+  // running the nodelets loads none of them. Every library links with -Wl,--no-undefined, so a
+  // library that used one without linking it would not link at all (checked below): what ldd
+  // lists is all each one needs.
+  for (const char* name : {"libstereo_fabmap_slam_nodelets.so", "libstereo_fabmap_slam_ros.so",
+                           "libstereo_fabmap_slam_core.so"}) {
+    const std::string library =
+        std::filesystem::path(STEREO_FABMAP_SLAM_CORE_LIBRARY).replace_filename(name).string();
+    const std::string linked = LinkedLibraries(library);
+    ASSERT_NE(linked.find("libopencv_core"), std::string::npos) << name << ":\n" << linked;
+    EXPECT_EQ(linked.find("libstereo_fabmap_slam_datasets"), std::string::npos) << name;
+    EXPECT_EQ(linked.find("libstereo_fabmap_slam_evaluation"), std::string::npos) << name;
+  }
+}
+
+TEST(CoreLibraryDependencies, EveryLibraryResolvesItsSymbols) {
+  // ldd -r reports the symbols a library leaves undefined that none of its libraries defines.
+  for (const char* name : {"libstereo_fabmap_slam_core.so", "libstereo_fabmap_slam_evaluation.so",
+                           "libstereo_fabmap_slam_datasets.so", "libstereo_fabmap_slam_ros.so",
+                           "libstereo_fabmap_slam_nodelets.so"}) {
+    const std::string library =
+        std::filesystem::path(STEREO_FABMAP_SLAM_CORE_LIBRARY).replace_filename(name).string();
+    std::string output;
+    EXPECT_EQ(RunCommand("ldd -r '" + library + "' 2>&1", &output), 0) << output;
+    EXPECT_EQ(output.find("undefined symbol"), std::string::npos) << name << ":\n" << output;
+  }
 }
 
 TEST(CoreLibraryDependencies, CoreSourcesIncludeNoRosHeader) {
@@ -63,7 +81,8 @@ TEST(CoreLibraryDependencies, CoreSourcesIncludeNoRosHeader) {
     for (const auto& entry : std::filesystem::recursive_directory_iterator(root + "/" + folder)) {
       const std::string path = entry.path().string();
       if (!entry.is_regular_file()) continue;
-      // ROS lives in the nodelets, the ROS helper library and the tools only.
+      // ROS lives in the nodelets, the ROS helper library and the tools only (the tools' bag
+      // writing among them).
       if (path.find("/src/nodelets/") != std::string::npos ||
           path.find("/src/ros/") != std::string::npos ||
           path.find("/src/tools/") != std::string::npos) {
