@@ -43,10 +43,9 @@ calibration=$PWD/config/euroc_stereo.yaml
 
 # A private master on a free port, so that the demo neither needs nor disturbs a running ROS.
 cleanup() {
-  kill "$recorder_pid" 2> /dev/null || true; kill -INT "$launch_pid" 2> /dev/null || true
+  kill -INT "$launch_pid" 2> /dev/null || true
   kill "$private_master_pid" 2> /dev/null || true; wait 2> /dev/null || true
 }
-recorder_pid=
 launch_pid=
 private_master_pid=
 trap cleanup EXIT
@@ -54,70 +53,66 @@ source scripts/private_master.sh
 mkdir -p "$OUT/ros"
 start_private_master "$PWD/$OUT/ros"
 
-echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector + Visualizer, rosbag play $bag"
-rosbag record -q -O "$OUT/recorded.bag" /odometry /keyframes /keyframe_updates /loop_edges /map_graph \
-  > /dev/null 2>&1 &
-recorder_pid=$!
-sleep 1
+# The graph writes its run as run_dataset does (output:=, the Recorder nodelet) and its map
+# (save_map:=) when it shuts down at the end of the bag.
+RUN=$OUT/run
+rm -rf "$RUN"
+echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector + Visualizer + Recorder, rosbag play $bag"
 graph_start=$SECONDS
 rviz=false
 [ "${RVIZ:-0}" = 1 ] && rviz=true
-# The graph stays up after the bag (exit_at_end:=false) for the relocalize call below.
-roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" rate:="$RATE" calibration:="$calibration" \
-  exit_at_end:=false rviz:=$rviz > "$OUT/roslaunch.log" 2>&1 &
-launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
-deadline=$((SECONDS + 60 + 3 * duration))
-until launched_node_running "$launch_pid" bag_player; do
-  kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
-    echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
-  sleep 0.5
-done
-while launched_node_running "$launch_pid" bag_player; do
-  kill -0 "$launch_pid" 2> /dev/null && [ $SECONDS -lt $deadline ] || {
-    echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
-  sleep 0.5
-done
+timeout $((60 + 3 * duration)) roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" \
+  rate:="$RATE" calibration:="$calibration" exit_at_end:=true rviz:=$rviz output:="$PWD/$RUN" \
+  save_map:="$PWD/$OUT/map.bin" > "$OUT/roslaunch.log" 2>&1 || {
+  echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
 graph_seconds=$((SECONDS - graph_start))
-sleep 1
-kill -INT "$recorder_pid"; wait "$recorder_pid" 2> /dev/null || true
-recorder_pid=
+[ -f "$RUN/summary.json" ] || { echo "demo: no run written; see $OUT/roslaunch.log" >&2; exit 1; }
 
-# Relocalization through the graph: the bag's first 4 s again (the tracker sees time go back
-# and starts afresh) while the relocalize service finds the camera in the map.
-echo "== relocalize: replaying the first 4 s and calling the relocalize service"
+# Relocalization through the graph: a new graph loads the saved map, the bag's first 4 s are
+# played into it, and the relocalize service finds the camera in the map.
+echo "== relocalize: loading the map into a new graph, playing the first 4 s, calling relocalize"
+rosparam set use_sim_time true
+roslaunch stereo_fabmap_slam euroc.launch calibration:="$calibration" visualizer:=false \
+  map_file:="$PWD/$OUT/map.bin" > "$OUT/roslaunch_relocalize.log" 2>&1 &
+launch_pid=$!
+until rosservice list 2> /dev/null | grep -q '^/relocalize$'; do
+  kill -0 "$launch_pid" 2> /dev/null || { echo "demo: see $OUT/roslaunch_relocalize.log" >&2; exit 1; }
+  sleep 0.5
+done
 (sleep 2; rosservice call /relocalize "{timeout: 3.0, reanchor: false}" > "$OUT/relocalize.txt" 2>&1) &
 caller_pid=$!
+timeout 20 rostopic echo -n 1 /tf_static > "$OUT/tf_static.txt" 2>&1 &
+mount_pid=$!
 rosbag play --clock --quiet -u 4 "$bag" > /dev/null 2>&1
 wait "$caller_pid" || true
+wait "$mount_pid" || true
 kill -INT "$launch_pid" 2> /dev/null || true
 wait "$launch_pid" 2> /dev/null || true
+launch_pid=
 
 echo "== evaluating against ground truth"
-/usr/bin/python3 scripts/odometry_bag_to_tum.py "$OUT/recorded.bag" "$OUT/odometry.txt" \
-  "$OUT/keyframes.txt" "$OUT/trajectory.txt" "$OUT/loops.txt" "$OUT/relocalizations.txt" \
-  > "$OUT/topics.txt"
-# The odometry is the base's (REP-105 base_link): the ground truth moves to it.
-gt=(--gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" --gt-to-base "$calibration")
-"$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/odometry.txt" > "$OUT/evaluation_odometry.txt"
-"$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/trajectory.txt" --keyframes "$OUT/keyframes.txt" \
-  --loops "$OUT/loops.txt" --relocalizations "$OUT/relocalizations.txt" --plot "$OUT/trajectory.png" \
-  > "$OUT/evaluation.txt"
+# The run's files are the rectified left camera's, as run_dataset's: the ground truth moves to it.
+gt=(--gt "$SEQUENCE/mav0/state_groundtruth_estimate0/data.csv" --gt-to-rectified "$calibration")
+awk -F, 'NR > 1 && $7 == 1 {print $2, $4}' "$RUN/loops.csv" > "$OUT/loops.txt"
+"$BIN/evaluate_trajectory" "${gt[@]}" --est "$RUN/odometry.txt" > "$OUT/evaluation_odometry.txt"
+"$BIN/evaluate_trajectory" "${gt[@]}" --est "$RUN/trajectory.txt" --keyframes "$RUN/keyframes.txt" \
+  --loops "$OUT/loops.txt" --plot "$OUT/trajectory.png" > "$OUT/evaluation.txt"
 loops_present="unknown (real data)"
 if [ -f "$SEQUENCE/mav0/synthetic.yaml" ]; then
   loops_present=$(sed -n 's/^revisits: \[\(.*\)\]/\1/p' "$SEQUENCE/mav0/synthetic.yaml" | awk -F, 'NF == 0 {print 0} NF > 0 {print NF}')
 fi
 frames=$(grep -c . "$SEQUENCE/mav0/cam0/data.csv"); frames=$((frames - 1))
-count() { awk -v topic="$1" '$1 == topic {print $2}' "$OUT/topics.txt"; }
-odometry=$(count /odometry)
-keyframes=$(count /keyframes)
-loop_edges=$(count /loop_edges)
-first_loop=$(awk '!/^#/ {print $1; exit}' "$OUT/loops.txt")
-start=$(awk '!/^#/ {print $1; exit}' "$OUT/odometry.txt")
+number() { /usr/bin/python3 -c "import json, sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$RUN/summary.json" "$1"; }
+tracked=$(number frames_tracked)
+keyframes=$(number keyframes)
+loops_accepted=$(number loops_accepted)
+first_loop=$(awk '{print $1; exit}' "$OUT/loops.txt")
+start=$(awk '!/^#/ {print $1; exit}' "$RUN/odometry.txt")
 ate=$(awk '/^ATE/ {print $3}' "$OUT/evaluation.txt")
 ate_odometry=$(awk '/^ATE/ {print $3}' "$OUT/evaluation_odometry.txt")
 # The relocalized pose in TUM, measured with the map trajectory's alignment to ground truth.
-relocalization=$(/usr/bin/python3 - "$OUT/relocalize.txt" "$OUT/relocalization.txt" <<'PYTHON'
+relocalization=$(/usr/bin/python3 - "$OUT/relocalize.txt" "$OUT/relocalization.txt" "$OUT/tf_static.txt" <<'PYTHON'
 import sys, yaml
 try:
     answer = yaml.safe_load(open(sys.argv[1]))
@@ -131,28 +126,44 @@ if not answer["success"]:
     sys.exit()
 pose = answer["pose"]
 stamp = pose["header"]["stamp"]["secs"] + 1e-9 * pose["header"]["stamp"]["nsecs"]
+# The service answers the base's pose; the run's trajectory is the camera's: base * mounting.
+mount = yaml.safe_load(open(sys.argv[3]).read().split("---")[0])["transforms"][0]["transform"]
+def mul(a, b):
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+def rotate(q, v):
+    x, y, z, _ = mul(mul(q, (v[0], v[1], v[2], 0.0)), (-q[0], -q[1], -q[2], q[3]))
+    return (x, y, z)
 p, q = pose["pose"]["position"], pose["pose"]["orientation"]
+qb = (q["x"], q["y"], q["z"], q["w"])
+t, r = mount["translation"], mount["rotation"]
+qm = (r["x"], r["y"], r["z"], r["w"])
+offset = rotate(qb, (t["x"], t["y"], t["z"]))
+position = (p["x"] + offset[0], p["y"] + offset[1], p["z"] + offset[2])
+qc = mul(qb, qm)
 with open(sys.argv[2], "w") as out:
-    out.write(f"{stamp:.9f} {p['x']} {p['y']} {p['z']} {q['x']} {q['y']} {q['z']} {q['w']}\n")
+    out.write(f"{stamp:.9f} {position[0]} {position[1]} {position[2]} {qc[0]} {qc[1]} {qc[2]} {qc[3]}\n")
 print(f"found against keyframe {answer['keyframe_id']} ({answer['inliers']} inliers, "
       f"{answer['time_ms']:.1f} ms)")
 PYTHON
 )
 if [ -f "$OUT/relocalization.txt" ] && [ "${relocalization#found}" != "$relocalization" ]; then
-  error=$("$BIN/evaluate_trajectory" "${gt[@]}" --est "$OUT/trajectory.txt" --poses "$OUT/relocalization.txt" \
+  error=$("$BIN/evaluate_trajectory" "${gt[@]}" --est "$RUN/trajectory.txt" --poses "$OUT/relocalization.txt" \
     | awk '/^pose/ {printf "%.2f cm, %.2f deg", 100 * $3, $5}')
   relocalization="$relocalization, error ${error} against ground truth"
 fi
 echo
 echo "demo summary ($NAME)"
 echo "  frames played           $frames"
-echo "  odometry messages       $odometry"
+echo "  frames tracked          $tracked"
 echo "  keyframes               ${keyframes:-0}"
-echo "  loop edges accepted     ${loop_edges:-0}${first_loop:+ (first at $(awk -v a="$first_loop" -v b="$start" 'BEGIN {printf "%.1f", a - b}') s)}"
+echo "  loops accepted          ${loops_accepted:-0}${first_loop:+ (first at $(awk -v a="$first_loop" -v b="$start" 'BEGIN {printf "%.1f", a - b}') s)}"
 echo "  revisits present        $loops_present"
 echo "  ATE RMSE odometry       $ate_odometry cm"
 echo "  ATE RMSE loop-closed    $ate cm"
 echo "  relocalization          $relocalization"
 echo "  ROS graph run time      ${graph_seconds} s (bag of $(rosbag info -y -k duration "$bag" | cut -c1-5) s at rate $RATE)"
-echo "  files                   $OUT/trajectory.txt, odometry.txt, keyframes.txt, loops.txt, trajectory.png, evaluation.txt, relocalize.txt"
+echo "  files                   $RUN/ (trajectory.txt, odometry.txt, keyframes.txt, loops.csv, timing.csv, summary.json), $OUT/map.bin, trajectory.png, evaluation.txt, relocalize.txt"
 echo "== demo done in ${SECONDS} s"

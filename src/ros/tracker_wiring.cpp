@@ -50,16 +50,18 @@ TrackerParameters ReadTrackerParameters(const ros::NodeHandle& private_node) {
     p.printed += "place recognition features from " + fabmap_config + "\n";
   }
   // REP-105 names, as rtabmap_ros and slam_toolbox default to.
-  p.odom_frame = private_node.param<std::string>("odom_frame", p.odom_frame);
-  p.base_frame = private_node.param<std::string>("base_frame", p.base_frame);
-  p.camera_frame = private_node.param<std::string>("camera_frame", p.camera_frame);
-  p.map_frame = private_node.param<std::string>("map_frame", p.map_frame);
+  p.frames.odom = private_node.param<std::string>("odom_frame", p.frames.odom);
+  p.frames.base = private_node.param<std::string>("base_frame", p.frames.base);
+  p.frames.camera = private_node.param<std::string>("camera_frame", p.frames.camera);
+  p.frames.map = private_node.param<std::string>("map_frame", p.frames.map);
   p.publish_tf = private_node.param("publish_tf", p.publish_tf);
   p.use_camera_info = private_node.param("use_camera_info", p.use_camera_info);
   p.approximate_sync = private_node.param("approximate_sync", p.approximate_sync);
   p.lockstep = private_node.param("lockstep", p.lockstep);
   p.queue_size = private_node.param("queue_size", p.queue_size);
   if (p.queue_size < 1) throw std::invalid_argument("~queue_size must be >= 1");
+  p.monitor.max_prediction_gap = p.options.tracker.max_prediction_gap;
+  p.monitor.unpaired_limit = p.queue_size;
   p.base_to_camera = ros_input::ReadBaseToCamera(private_node);
   if (!p.use_camera_info && !private_node.getParam("calibration_file", p.calibration_file)) {
     throw std::invalid_argument(
@@ -93,6 +95,21 @@ void EventLog::Log(const pipeline::InputEvent& event) {
     ROS_WARN("[%s] %s", name_.c_str(), event.message.c_str());
   } else {
     ROS_INFO("[%s] %s", name_.c_str(), event.message.c_str());
+  }
+}
+
+void TrackingNews::Report(const odometry::TrackingResult& result, EventLog* log) {
+  if (result.state == odometry::TrackingState::kLost) {
+    const bool new_segment = result.keyframe && result.keyframe->starts_new_segment;
+    log->Log({pipeline::InputEvent::Kind::kTrackingLost, "tracking lost: " + result.reason, true,
+              !new_segment});
+    lost_with_map_kept_ = result.map_kept ? lost_with_map_kept_ + 1 : 0;
+  } else if (lost_with_map_kept_ > 0) {
+    log->Log({pipeline::InputEvent::Kind::kTrackingFound,
+              "tracking found the map again after " + std::to_string(lost_with_map_kept_) +
+                  " lost frame(s); odom goes on unbroken",
+              false, false});
+    lost_with_map_kept_ = 0;
   }
 }
 

@@ -29,6 +29,7 @@
 #include "stereo_fabmap_slam/pipeline/relocalization_policy.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/relocalization/relocalization_options.h"
+#include "tracker_outputs.h"
 
 namespace stereo_fabmap_slam::ros_wiring {
 
@@ -39,8 +40,8 @@ struct TrackerParameters {
   camera::RectificationOptions rectification;
   pipeline::FrontEndOptions options;
   relocalization::RelocalizerOptions relocalizer;
-  std::string odom_frame = "odom", base_frame = "base_link", camera_frame = "camera_optical",
-              map_frame = "map";
+  pipeline::InputMonitorOptions monitor;
+  FrameNames frames;
   bool publish_tf = true;
   bool use_camera_info = false;
   bool approximate_sync = false;
@@ -74,6 +75,17 @@ class EventLog {
 // Why a pair of image messages cannot be read ("" if it can): a message that is not what it says
 // (ros_conversions::MalformedImageReason), named with its side.
 std::string ImageRefusal(const sensor_msgs::Image& left, const sensor_msgs::Image& right);
+
+// Says what the tracker's results mean for the user: "tracking lost" (once for each new
+// segment, never throttled, so that they can be counted; throttled while the tracker searches
+// its map), and "tracking found the map again" after frames lost with the map kept.
+class TrackingNews {
+ public:
+  void Report(const odometry::TrackingResult& result, EventLog* log);
+
+ private:
+  int lost_with_map_kept_ = 0;
+};
 
 struct ImagePair {
   sensor_msgs::ImageConstPtr left, right;

@@ -10,6 +10,7 @@
 
 #include "command_line.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_plot.h"
 #include "stereo_fabmap_slam/io/csv_reader.h"
@@ -21,7 +22,8 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 
 constexpr char kUsage[] =
     "usage: evaluate_trajectory --gt FILE --est FILE [--align se3|sim3|none] [--max-dt S]\n"
-    "                           [--gt-to-camera sensor.yaml | --gt-to-base stereo.yaml]\n"
+    "                           [--gt-to-camera sensor.yaml | --gt-to-base stereo.yaml |\n"
+    "                            --gt-to-rectified stereo.yaml]\n"
     "                           [--rpe-delta D] [--rpe-unit frames|m] [--json] [--plot out.png]\n"
     "                           [--keyframes FILE] [--loops FILE] [--relocalizations FILE]\n"
     "Trajectory files: TUM (t x y z qx qy qz qw), EuRoC CSV (.csv, stamps in ns) or KITTI (3x4).\n"
@@ -31,7 +33,9 @@ constexpr char kUsage[] =
     "translation norm and angle of (GT_i^-1 GT_j)^-1 (EST_i^-1 EST_j).\n"
     "--gt-to-camera: the ground truth of the body moved to the camera of a sensor.yaml (T_BS),\n"
     "as the offline runner's camera trajectories; --gt-to-base: moved to the base of a stereo\n"
-    "calibration (its T_body_base, e.g. config/euroc_stereo.yaml), as the nodelets' odometry.\n"
+    "calibration (its T_body_base, e.g. config/euroc_stereo.yaml), as the nodelets' odometry;\n"
+    "--gt-to-rectified: moved to the rectified left camera of a stereo calibration, as the\n"
+    "trajectory files of run_dataset and of the graph (output:=DIR) estimate it.\n"
     "--plot: a top view (x-y) and a side view (x-z) of ground truth and aligned estimate, with\n"
     "the keyframes, loop edges and relocalizations given.\n"
     "--loops FILE, --relocalizations FILE: lines 'query_time match_time' (the two keyframes of\n"
@@ -167,8 +171,8 @@ int main(int argc, char** argv) {
   try {
     args.emplace(argc, argv,
                  std::set<std::string>{"gt", "est", "align", "max-dt", "gt-to-camera", "gt-to-base",
-                                       "plot", "rpe-delta", "rpe-unit", "keyframes", "loops",
-                                       "relocalizations", "poses"},
+                                       "gt-to-rectified", "plot", "rpe-delta", "rpe-unit",
+                                       "keyframes", "loops", "relocalizations", "poses"},
                  std::set<std::string>{"json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
@@ -180,8 +184,10 @@ int main(int argc, char** argv) {
     if (args->Value("poses") && args->Flag("json")) {
       throw std::invalid_argument("--poses prints a table: leave out --json");
     }
-    if (args->Value("gt-to-camera") && args->Value("gt-to-base")) {
-      throw std::invalid_argument("give --gt-to-camera or --gt-to-base, not both");
+    if ((args->Value("gt-to-camera") ? 1 : 0) + (args->Value("gt-to-base") ? 1 : 0) +
+            (args->Value("gt-to-rectified") ? 1 : 0) >
+        1) {
+      throw std::invalid_argument("give one of --gt-to-camera, --gt-to-base and --gt-to-rectified");
     }
     gt_path = *args->Value("gt");
     est_path = *args->Value("est");
@@ -205,6 +211,12 @@ int main(int argc, char** argv) {
     if (const auto sensor_yaml = args->Value("gt-to-camera")) {
       const camera::CameraCalibration camera = camera::ReadEurocSensorYaml(*sensor_yaml);
       ground_truth = evaluation::TransformToSensorFrame(ground_truth, camera.T_body_camera);
+    }
+    if (const auto stereo_yaml = args->Value("gt-to-rectified")) {
+      ground_truth = evaluation::TransformToSensorFrame(
+          ground_truth,
+          camera::StereoRectifier::FromCalibration(camera::ReadStereoCalibrationYaml(*stereo_yaml))
+              .T_body_rectified_left());
     }
     if (const auto stereo_yaml = args->Value("gt-to-base")) {
       ground_truth = evaluation::TransformToSensorFrame(

@@ -76,14 +76,36 @@ void RunDataset(const std::string& asl, const std::string& output, const std::st
 }
 
 // The graph on the sequence in lockstep, until the bag ends; `extra`: more launch arguments.
-void RunGraph(const Sequence& sequence, const std::string& output, const std::string& extra) {
+// With `recorded`, its topics are recorded into that bag too.
+void RunGraph(const Sequence& sequence, const std::string& output, const std::string& extra,
+              const std::string& recorded = "") {
   const std::string log_path = output + ".roslaunch.log";
+  const std::string recorder_pid = output + ".record.pid";
+  if (!recorded.empty()) {
+    // rosbag's recorder itself (not the `rosbag record` script), so that SIGINT closes the bag.
+    ASSERT_EQ(std::system(("/usr/lib/rosbag/record -q -O " + recorded +
+                           " /tracked_frames /keyframes /keyframe_updates /place_results "
+                           "/map_graph /map_loaded /mode > /dev/null 2>&1 & echo $! > " +
+                           recorder_pid)
+                              .c_str()),
+              0);
+    ros::WallDuration(2.0).sleep();  // subscribed before the graph starts
+  }
   const int status = std::system(
       ("roslaunch --wait stereo_fabmap_slam euroc_bag.launch lockstep:=true exit_at_end:=true "
        "visualizer:=false bag:=" +
        sequence.bag + " calibration:=" + sequence.calibration + " base_to_camera:='" +
        sequence.base_to_camera + "' output:=" + output + " " + extra + " > " + log_path + " 2>&1")
           .c_str());
+  if (!recorded.empty()) {
+    ros::WallDuration(1.0).sleep();
+    const std::string pid = ReadTextFile(recorder_pid);
+    // Interrupted, it writes the bag out and renames it from .active; wait for that.
+    std::system(("kill -INT " + pid + "; while kill -0 " + pid +
+                 " 2> /dev/null; do sleep 0.1; "
+                 "done")
+                    .c_str());
+  }
   const std::string log = ReadTextFile(log_path);
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << log;
   EXPECT_NE(log.find("lockstep_player: played"), std::string::npos) << log;
@@ -174,7 +196,8 @@ void CheckBothDrivers(const Sequence& sequence, const std::string& folder, bool 
                       bool cross_load) {
   const std::string offline = folder + "/offline", graph = folder + "/graph";
   RunDataset(sequence.asl, offline, "--save-map " + folder + "/offline.map");
-  RunGraph(sequence, graph, "save_map:=" + folder + "/graph.map");
+  RunGraph(sequence, graph, "save_map:=" + folder + "/graph.map",
+           cross_load ? folder + "/recorded.bag" : "");
   const std::string offline_summary = ReadTextFile(offline + "/summary.json");
   const std::string graph_summary = ReadTextFile(graph + "/summary.json");
   for (const char* key : {"frames", "keyframes", "map_keyframes", "trajectory_frames",
@@ -200,6 +223,17 @@ void CheckBothDrivers(const Sequence& sequence, const std::string& folder, bool 
   const map::SavedMap graph_map = map::LoadMapFile(folder + "/graph.map");
   ExpectSameMaps(offline_map, graph_map);
   if (!cross_load) return;
+
+  // The graph's topics recorded, turned into the same files afterwards.
+  std::string log;
+  ASSERT_EQ(RunCommand(std::string(BAG_TO_RUN_BIN) + " " + folder + "/recorded.bag --output " +
+                           folder + "/from_bag 2>&1",
+                       &log),
+            0)
+      << log;
+  for (const char* file : {"trajectory.txt", "odometry.txt", "keyframes.txt", "loops.csv"}) {
+    EXPECT_EQ(ReadTextFile(folder + "/from_bag/" + file), ReadTextFile(graph + "/" + file)) << file;
+  }
 
   // Each driver localizes in the other's map: every keyframe relocalized, the frames in the map.
   RunDataset(sequence.asl, folder + "/offline_in_graph_map",

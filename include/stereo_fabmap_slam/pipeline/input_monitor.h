@@ -10,9 +10,12 @@
 
 namespace stereo_fabmap_slam::pipeline {
 
-// Something about the camera input the user should hear of; the driver logs it.
+// Something about the camera input (or what tracking made of it) the user should hear of; the
+// driver logs it.
 struct InputEvent {
   enum class Kind {
+    kTrackingLost,    // a frame not tracked (the drivers say it)
+    kTrackingFound,   // tracking found its map again after lost frames (the drivers say it)
     kUnreadable,      // a message the driver could not make an image of: refused (CountRefused)
     kWrongSize,       // a pair of another size than the calibration's: refused
     kFrozen,          // the same image again under a new stamp: refused
