@@ -2,12 +2,9 @@
 // Backend's answers to them (keyframe_updates) in; a place result per mapped keyframe
 // (place_results) and relocalization edges out; the map's snapshot from map_graph. Services:
 // detect_loop, relocalize_frame (the StereoTracker's), save_map, load_map (and ~map_file at
-// start), set_mode (and ~mode), announced as map_loaded and mode. The stage decides; this file
-// pairs each keyframe with its answer, converts, calls and publishes. A map file or mode it
-// refuses at start leaves it running with an empty map in mapping mode, and says so.
-#include <condition_variable>
-#include <deque>
-#include <map>
+// start, ~save_map at the end), set_mode (and ~mode), announced as map_loaded and mode. The stage
+// decides; this file pairs each keyframe with its answer, converts, calls and publishes. A map
+// file or mode it refuses at start leaves it running with an empty map in mapping mode.
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -20,18 +17,13 @@
 #include <std_msgs/String.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
 #include <stereo_fabmap_slam/MapFile.h>
-#include <stereo_fabmap_slam/MapLoaded.h>
 #include <stereo_fabmap_slam/SetMode.h>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "parameter_reader.h"
 #include "place_wiring.h"
 #include "ros_conversions.h"
 #include "stage_conversions.h"
-#include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/map/map_file.h"
-#include "stereo_fabmap_slam/pipeline/place_stage.h"
-#include "tracker_wiring.h"
 
 namespace stereo_fabmap_slam {
 
@@ -42,25 +34,25 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
     relocalize_service_.shutdown();  // before its queue
     pairing_.Stop();
     if (worker_.joinable()) worker_.join();
-    if (!parameters_.save_map_at_exit.empty()) {
-      stereo_fabmap_slam::MapFile::Request request;
-      stereo_fabmap_slam::MapFile::Response response;
-      request.path = parameters_.save_map_at_exit;
-      OnSaveMap(request, response);
-      ROS_INFO_STREAM("[loop_detector] ~save_map " << request.path << ": " << response.message);
-    }
+    if (parameters_.save_map_at_exit.empty()) return;
+    stereo_fabmap_slam::MapFile::Request request;
+    stereo_fabmap_slam::MapFile::Response response;
+    request.path = parameters_.save_map_at_exit;
+    OnSaveMap(request, response);
+    ROS_INFO_STREAM("[loop_detector] ~save_map " << request.path << ": " << response.message);
   }
 
  private:
   void onInit() override;
   void Work();
-  // The stage for the map's camera (made once: the first keyframe's or a loaded map's). Call
-  // with mutex_.
-  pipeline::PlaceStage& Stage(const geometry::StereoCamera& camera);
-  // Loads a map file in place of the map and announces it; throws (the map is kept) for a file
-  // that is damaged or does not fit. Call with mutex_.
+  // Replaces the map by a file's and announces it; throws (the map is kept) for a file that is
+  // damaged or does not fit. Call with mutex_.
   std::size_t LoadMap(const std::string& path);
   bool SetMode(const std::string& name);  // announces it; false for an unknown name
+  std::shared_ptr<const pipeline::MapSnapshot> Map() {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    return map_;
+  }
   bool OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
                     stereo_fabmap_slam::DetectLoop::Response& response);
   bool OnRelocalizeFrame(stereo_fabmap_slam::RelocalizeFrame::Request& request,
@@ -80,10 +72,9 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
 
   ros_wiring::PlaceParameters parameters_;
   std::mutex mutex_;  // the stage: the worker and the services share it
-  std::optional<pipeline::PlaceStage> stage_;
-  std::optional<geometry::StereoCamera> camera_;  // the map's
+  ros_wiring::PlaceStageHolder stage_{parameters_};
+  std::mutex map_mutex_;
   std::shared_ptr<const pipeline::MapSnapshot> map_ = std::make_shared<pipeline::MapSnapshot>();
-  std::mutex map_mutex_;  // map_
   ros_wiring::KeyframePairing pairing_;
   std::thread worker_;
   ros::Subscriber keyframe_subscriber_, update_subscriber_, graph_subscriber_;
@@ -98,9 +89,9 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
 };
 
 void LoopDetectorNodelet::onInit() {
-  ros::NodeHandle& private_node = getPrivateNodeHandle();
+  ros::NodeHandle& node = getNodeHandle();
   try {  // before any ROS object exists: a throw unloads cleanly
-    parameters_ = ros_wiring::ReadPlaceParameters(private_node);
+    parameters_ = ros_wiring::ReadPlaceParameters(getPrivateNodeHandle());
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
@@ -108,7 +99,6 @@ void LoopDetectorNodelet::onInit() {
   NODELET_INFO_STREAM("vocabulary " << parameters_.place.vocabulary_directory
                                     << "; options in force:\n"
                                     << parameters_.printed);
-  ros::NodeHandle& node = getNodeHandle();
   place_publisher_ = node.advertise<stereo_fabmap_slam::PlaceResult>("place_results", 100);
   edge_publisher_ = node.advertise<stereo_fabmap_slam::LoopEdge>("relocalization_edges", 100);
   loaded_publisher_ = node.advertise<stereo_fabmap_slam::MapLoaded>("map_loaded", 1, true);
@@ -168,15 +158,14 @@ void LoopDetectorNodelet::Work() {
     }
     try {
       std::lock_guard<std::mutex> lock(mutex_);
-      const bool first = !stage_;
-      pipeline::PlaceStage& stage = Stage(ros_conversions::CameraOfKeyframe(*pair->keyframe));
       // A LoopDetector (re)started while the tracker runs: say what its places do not cover.
-      if (first && pair->keyframe->id > 0) {
+      if (stage_.get() == nullptr && pair->keyframe->id > 0) {
         NODELET_WARN(
             "first keyframe received is %lu: the keyframes before it are not places "
             "of this LoopDetector (restarted while the tracker ran?)",
             static_cast<unsigned long>(pair->keyframe->id));
       }
+      pipeline::PlaceStage& stage = stage_.For(ros_conversions::CameraOfKeyframe(*pair->keyframe));
       const pipeline::MappedKeyframe mapped =
           ros_conversions::FromMappedKeyframeMessage(*pair->update);
       stage.AddKeyframe(ros_conversions::FromKeyframeMessage(*pair->keyframe), mapped);
@@ -197,44 +186,16 @@ void LoopDetectorNodelet::Work() {
   }
 }
 
-pipeline::PlaceStage& LoopDetectorNodelet::Stage(const geometry::StereoCamera& camera) {
-  if (!stage_) {
-    stage_.emplace(pipeline::PlaceStage::LoadDetector(parameters_.place, parameters_.detection,
-                                                      camera, parameters_.descriptor.norm,
-                                                      parameters_.descriptor.max_match_distance),
-                   parameters_.relocalizer, ros_wiring::SteadyMilliseconds);
-    camera_ = camera;
-  }
-  return *stage_;
-}
-
 std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
   const map::SavedMap saved = map::LoadMapFile(path);
-  // No keyframe yet: the map brings its camera (the Backend refuses keyframes of another).
-  const bool fresh = !stage_;
-  pipeline::LoadedMap loaded;
-  try {
-    loaded = Stage(saved.camera).Load(saved, *camera_);
-  } catch (...) {
-    if (fresh) {  // the next keyframe brings the camera after all
-      stage_.reset();
-      camera_.reset();
-    }
-    throw;
-  }
+  const pipeline::LoadedMap loaded = stage_.Load(saved);
   // Until the Backend publishes its graph rebuilt from the same file, the map is the file's.
   auto map = std::make_shared<pipeline::MapSnapshot>(ros_wiring::SnapshotOfSavedMap(saved));
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     map_ = std::move(map);
   }
-  stereo_fabmap_slam::MapLoaded message;
-  message.header.stamp = ros::Time::now();
-  message.path = path;
-  message.keyframes = loaded.keyframes;
-  message.next_keyframe_id = static_cast<std::uint64_t>(loaded.next_keyframe_id);
-  message.next_point_id = static_cast<std::uint64_t>(loaded.next_point_id);
-  loaded_publisher_.publish(message);
+  loaded_publisher_.publish(ros_conversions::ToMapLoadedMessage(path, loaded));
   return loaded.keyframes;
 }
 
@@ -251,26 +212,26 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
                                        stereo_fabmap_slam::DetectLoop::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
+    pipeline::PlaceStage* stage = stage_.get();
     place_recognition::LoopDetection detection;
     if (request.keyframe_id >= 0) {
-      if (!stage_ || !stage_->detector().database().Contains(request.keyframe_id)) {
+      if (stage == nullptr || !stage->detector().database().Contains(request.keyframe_id)) {
         response.message = "keyframe " + std::to_string(request.keyframe_id) + " is not in the map";
         return true;
       }
-      detection = stage_->DetectLoop(request.keyframe_id).detection;
+      detection = stage->DetectLoop(request.keyframe_id).detection;
+    } else if (request.keyframe.place_descriptors.empty() || request.keyframe.u.empty()) {
+      response.message = "the keyframe has no descriptors";
+      return true;
     } else {
-      if (request.keyframe.place_descriptors.empty() || request.keyframe.u.empty()) {
-        response.message = "the keyframe has no descriptors";
-        return true;
-      }
-      pipeline::PlaceStage& stage = Stage(ros_conversions::CameraOfKeyframe(request.keyframe));
-      if (request.add_to_map && stage.detector().database().Contains(request.keyframe.id)) {
+      stage = &stage_.For(ros_conversions::CameraOfKeyframe(request.keyframe));
+      if (request.add_to_map && stage->detector().database().Contains(request.keyframe.id)) {
         response.message =
             "keyframe " + std::to_string(request.keyframe.id) + " is in the map already";
         return true;
       }
       detection =
-          stage.Detect(ros_conversions::FromKeyframeMessage(request.keyframe), request.add_to_map);
+          stage->Detect(ros_conversions::FromKeyframeMessage(request.keyframe), request.add_to_map);
     }
     ros_wiring::FillDetectLoopResponse(detection, &response);
   } catch (const std::exception& error) {
@@ -283,21 +244,17 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
 bool LoopDetectorNodelet::OnRelocalizeFrame(
     stereo_fabmap_slam::RelocalizeFrame::Request& request,
     stereo_fabmap_slam::RelocalizeFrame::Response& response) {
-  std::shared_ptr<const pipeline::MapSnapshot> map;
-  {
-    std::lock_guard<std::mutex> lock(map_mutex_);
-    map = map_;
-  }
+  const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
   std::lock_guard<std::mutex> lock(mutex_);
+  response.keyframe_id = -1;
   try {
-    if (!stage_ || stage_->empty()) {
+    if (stage_.empty()) {
       response.status = "empty map";
       response.message = "the map is empty";
-      response.keyframe_id = -1;
       return true;
     }
     const pipeline::RelocalizationAnswer answer =
-        stage_->Relocalize(ros_conversions::FromRelocalizeFrameRequest(request), *map);
+        stage_.get()->Relocalize(ros_conversions::FromRelocalizeFrameRequest(request), *map);
     response = ros_conversions::ToRelocalizeFrameResponse(answer);
     if (answer.edge) {
       stereo_fabmap_slam::LoopEdge edge = response.edge;
@@ -317,18 +274,14 @@ bool LoopDetectorNodelet::OnRelocalizeFrame(
 
 bool LoopDetectorNodelet::OnSaveMap(stereo_fabmap_slam::MapFile::Request& request,
                                     stereo_fabmap_slam::MapFile::Response& response) {
-  std::shared_ptr<const pipeline::MapSnapshot> map;
-  {
-    std::lock_guard<std::mutex> lock(map_mutex_);
-    map = map_;
-  }
+  const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!stage_ || stage_->empty()) {
+  if (stage_.empty()) {
     response.message = "the map is empty";
     return true;
   }
   try {
-    const map::SavedMap saved = stage_->Save(*map, *camera_);
+    const map::SavedMap saved = stage_.get()->Save(*map, stage_.camera());
     map::SaveMapFile(request.path, saved);
     response.success = true;
     response.keyframes = static_cast<std::uint32_t>(saved.keyframes.size());

@@ -30,8 +30,7 @@ namespace stereo_fabmap_slam {
 class StereoTrackerNodelet : public nodelet::Nodelet {
  public:
   ~StereoTrackerNodelet() override {
-    if (service_spinner_) service_spinner_->stop();  // before the members its callback uses
-    relocalize_service_.shutdown();                  // before its queue
+    relocalize_service_.reset();  // before the stage its calls reach
     pairs_.Stop();
     if (worker_.joinable()) worker_.join();
   }
@@ -45,8 +44,10 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   // Asks the LoopDetector (relocalize_frame) and hands the answer to the stage. Call with mutex_.
   void Relocalize(const ros::Time& stamp, const pipeline::RelocalizationRequest& request,
                   pipeline::FrameRecord* record);
-  bool OnRelocalize(stereo_fabmap_slam::Relocalize::Request& request,
-                    stereo_fabmap_slam::Relocalize::Response& response);
+  // The relocalize service's answer, handed over without the stage's lock.
+  void AnswerUser(const pipeline::UserRelocalization& answer) {
+    if (relocalize_service_) relocalize_service_->Answer(answer);
+  }
   void Log(const pipeline::InputEvent& event) { event_log_.Log(event); }
 
   ros_wiring::TrackerParameters parameters_;
@@ -58,18 +59,13 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   pipeline::SlamMode mode_ = pipeline::SlamMode::kMapping;  // for a stage made later
   std::optional<pipeline::LoadedMap> loaded_map_;           // a map loaded before the stage
   ros_wiring::PairQueue pairs_;
-  ros_wiring::MappingProgress mapping_;  // map_graph, updates: the snapshot and lockstep's cue
-  ros_wiring::UserRequests user_requests_;
+  ros_wiring::MappingProgress mapping_;     // map_graph, updates: the snapshot and lockstep's cue
   std::uint64_t relocalization_edges_ = 0;  // edges its relocalizations added (worker only)
   std::thread worker_;
   std::unique_ptr<ros_input::StereoImageInput> input_;
   ros::Subscriber update_subscriber_, graph_subscriber_, mode_subscriber_, loaded_subscriber_;
   ros::ServiceClient relocalize_frame_client_;
-  // The queue outlives the server advertised on it: a server destroyed after its queue locks the
-  // queue's freed mutex (boost::lock_error when the manager unloads the nodelet).
-  ros::CallbackQueue service_queue_;
-  std::unique_ptr<ros::AsyncSpinner> service_spinner_;
-  ros::ServiceServer relocalize_service_;
+  std::unique_ptr<ros_wiring::RelocalizeService> relocalize_service_;
 };
 
 void StereoTrackerNodelet::onInit() {
@@ -158,14 +154,17 @@ void StereoTrackerNodelet::Subscribe(ros::NodeHandle& node) {
       });
   relocalize_frame_client_ =
       node.serviceClient<stereo_fabmap_slam::RelocalizeFrame>("relocalize_frame", true);
-  // On a queue and thread of its own: the call waits for the next frame, which the worker
-  // handles meanwhile, and must not hold a thread of the manager's pool.
-  ros::NodeHandle service_node(node);
-  service_node.setCallbackQueue(&service_queue_);
-  relocalize_service_ =
-      service_node.advertiseService("relocalize", &StereoTrackerNodelet::OnRelocalize, this);
-  service_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &service_queue_);
-  service_spinner_->start();
+  relocalize_service_ = std::make_unique<ros_wiring::RelocalizeService>(
+      node, *outputs_,
+      ros_wiring::RelocalizeService::Hooks{[this] { return mapping_.Snapshot()->empty(); },
+                                           [this](bool reanchor) {
+                                             std::lock_guard<std::mutex> lock(mutex_);
+                                             if (stage_) stage_->RequestRelocalization(reanchor);
+                                           },
+                                           [this] {
+                                             std::lock_guard<std::mutex> lock(mutex_);
+                                             if (stage_) stage_->CancelRelocalizationRequest();
+                                           }});
 }
 
 void StereoTrackerNodelet::StartStage(const ros_input::MountedRig& rig) {
@@ -241,7 +240,7 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
   record.T_map_camera = stage_->T_map_camera();
   const pipeline::InputCounts counts = stage_->input().counts();
   lock.unlock();
-  if (output.user) user_requests_.Answer(*output.user);  // a frame without a pose: why
+  if (output.user) AnswerUser(*output.user);  // a frame without a pose: why
   // Lockstep: the other stages' answers before the next pair, in the order run_dataset takes
   // them.
   const std::int64_t keyframe = output.tracking.keyframe ? output.tracking.keyframe->id : -1;
@@ -271,7 +270,7 @@ void StereoTrackerNodelet::Relocalize(const ros::Time& stamp,
   if (!relocalize_frame_client_.call(call)) {
     pipeline::UserRelocalization unavailable;
     unavailable.message = "the LoopDetector's relocalize_frame service is not available";
-    if (request.from_user) user_requests_.Answer(unavailable);  // its caller holds no lock here
+    if (request.from_user) AnswerUser(unavailable);
     NODELET_WARN_THROTTLE(5, "relocalization: %s", unavailable.message.c_str());
     return;
   }
@@ -286,39 +285,7 @@ void StereoTrackerNodelet::Relocalize(const ros::Time& stamp,
   }
   if (!outcome.news.empty()) NODELET_INFO("%s", outcome.news.c_str());
   if (outcome.T_map_odom) outputs_->PublishCorrection(stamp, *outcome.T_map_odom);
-  if (outcome.user) user_requests_.Answer(*outcome.user);
-}
-
-bool StereoTrackerNodelet::OnRelocalize(stereo_fabmap_slam::Relocalize::Request& request,
-                                        stereo_fabmap_slam::Relocalize::Response& response) {
-  response.keyframe_id = -1;
-  const std::optional<double> timeout = ros_wiring::RelocalizeTimeout(request.timeout);
-  if (!timeout) {
-    response.message = "timeout must be a number of seconds in [0, 60] (0: 1 s)";
-    return true;
-  }
-  if (mapping_.Snapshot()->empty()) {
-    response.message = "map is empty";
-    return true;
-  }
-  const std::optional<pipeline::UserRelocalization> answer = user_requests_.Ask(
-      *timeout,
-      [&] {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (stage_) stage_->RequestRelocalization(request.reanchor);
-      },
-      [&] {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (stage_) stage_->CancelRelocalizationRequest();
-      });
-  if (!answer) {
-    char text[96];
-    std::snprintf(text, sizeof(text), "no stereo images arrived within %.1f s", *timeout);
-    response.message = text;
-    return true;
-  }
-  outputs_->FillResponse(*answer, &response);
-  return true;
+  if (outcome.user) AnswerUser(*outcome.user);
 }
 
 }  // namespace stereo_fabmap_slam

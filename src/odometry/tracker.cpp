@@ -299,7 +299,7 @@ TrackingResult Tracker::Lose(double timestamp, features::StereoFeatures features
   // its check). Matches that are wrong agree with a pose within the RANSAC threshold by chance
   // with odds of about 1e-4 each (a 2 px disc in a 752 x 480 image), so two beyond the sample
   // are evidence. A camera that sees nothing of the local map (kidnapped, or facing a wall)
-  // starts a new piece at once, which relocalization joins to the map.
+  // starts a new segment at once, which relocalization joins to the map.
   constexpr int kConsensusThatSeesTheMap = 6;
   const double since_tracked = timestamp - last_timestamp_;
   if (since_tracked > options_.max_time_lost || consensus < kConsensusThatSeesTheMap) {
@@ -367,7 +367,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   const bool searched_by_descriptor = inliers(ransac) < options_.min_inliers_ok;
   if (searched_by_descriptor) {
     // The prediction found too little: the camera moved other than the motion model says (it
-    // turned or stopped over frames a busy tracker skipped, or right after a new map started
+    // turned or stopped over frames a busy tracker skipped, or right after a new segment started
     // with an old velocity). Descriptors alone find the frame in the local map wherever it is;
     // the better of the two consensus sets wins, so a weak but right prediction is kept.
     const std::vector<Match> by_descriptor = SearchByDescriptor(features);

@@ -33,7 +33,7 @@ inline constexpr char kRelocalizedNamespace[] = "relocalized_keyframes";
 inline constexpr int kFrustumSegments = 8;
 
 // The map segment of each keyframe of the graph: keyframes joined by odometry edges form one
-// piece of odometry (a loss starts a new one). Numbered from 0 in order of their first id.
+// segment of odometry (a loss starts a new one). Numbered from 0 in order of their first id.
 std::map<std::uint64_t, int> MapSegments(const stereo_fabmap_slam::MapGraph& graph);
 
 // All five markers in the graph's frame. A namespace with nothing to draw gets a DELETE

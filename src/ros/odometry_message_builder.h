@@ -19,7 +19,7 @@ namespace stereo_fabmap_slam::ros_conversions {
 // uncertainty relative to the local map, not the drift accumulated since the start; a fusion
 // node should take the odometry differentially (robot_localization's `differential`). The twist
 // covariance is that of the difference of two such poses, (C_previous + C_current) / dt^2.
-// What is not known (the first frame, a new piece of odometry) carries 1e6 on the diagonal.
+// What is not known (the first frame, a new segment of odometry) carries 1e6 on the diagonal.
 class OdometryMessageBuilder {
  public:
   OdometryMessageBuilder(const BaseFrameConvention& frames, std::string odom_frame,

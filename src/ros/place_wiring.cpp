@@ -1,5 +1,6 @@
 #include "place_wiring.h"
 
+#include <chrono>
 #include <stdexcept>
 
 #include "parameter_reader.h"
@@ -79,6 +80,34 @@ void KeyframePairing::Stop() {
     stopping_ = true;
   }
   changed_.notify_all();
+}
+
+pipeline::PlaceStage& PlaceStageHolder::For(const geometry::StereoCamera& camera) {
+  if (!stage_) {
+    stage_.emplace(pipeline::PlaceStage::LoadDetector(parameters_.place, parameters_.detection,
+                                                      camera, parameters_.descriptor.norm,
+                                                      parameters_.descriptor.max_match_distance),
+                   parameters_.relocalizer, [] {
+                     return std::chrono::duration<double, std::milli>(
+                                std::chrono::steady_clock::now().time_since_epoch())
+                         .count();
+                   });
+    camera_ = camera;
+  }
+  return *stage_;
+}
+
+pipeline::LoadedMap PlaceStageHolder::Load(const map::SavedMap& saved) {
+  const bool fresh = !stage_;
+  try {
+    return For(saved.camera).Load(saved, *camera_);
+  } catch (...) {
+    if (fresh) {
+      stage_.reset();
+      camera_.reset();
+    }
+    throw;
+  }
 }
 
 pipeline::MapSnapshot SnapshotOfSavedMap(const map::SavedMap& saved) {

@@ -129,6 +129,17 @@ pipeline::MapSnapshot FromMapGraphMessage(const stereo_fabmap_slam::MapGraph& me
   return snapshot;
 }
 
+stereo_fabmap_slam::MapLoaded ToMapLoadedMessage(const std::string& path,
+                                                 const pipeline::LoadedMap& loaded) {
+  stereo_fabmap_slam::MapLoaded message;
+  message.header.stamp = ros::Time::now();
+  message.path = path;
+  message.keyframes = loaded.keyframes;
+  message.next_keyframe_id = static_cast<std::uint64_t>(loaded.next_keyframe_id);
+  message.next_point_id = static_cast<std::uint64_t>(loaded.next_point_id);
+  return message;
+}
+
 stereo_fabmap_slam::PlaceResult ToPlaceResultMessage(const pipeline::PlaceResult& result) {
   stereo_fabmap_slam::PlaceResult message;
   message.header.stamp.fromSec(result.timestamp);

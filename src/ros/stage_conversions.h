@@ -7,6 +7,7 @@
 
 #include <stereo_fabmap_slam/KeyframeUpdate.h>
 #include <stereo_fabmap_slam/MapGraph.h>
+#include <stereo_fabmap_slam/MapLoaded.h>
 #include <stereo_fabmap_slam/PlaceResult.h>
 #include <stereo_fabmap_slam/RelocalizeFrame.h>
 #include <stereo_fabmap_slam/TrackedFrame.h>
@@ -29,6 +30,10 @@ pipeline::MappedKeyframe FromMappedKeyframeMessage(
 // stages keep of it. Throws std::invalid_argument for arrays of different lengths.
 stereo_fabmap_slam::MapGraph ToMapGraphMessage(const pipeline::MappingStage& mapping);
 pipeline::MapSnapshot FromMapGraphMessage(const stereo_fabmap_slam::MapGraph& message);
+
+// A loaded map, announced (map_loaded; stamped now).
+stereo_fabmap_slam::MapLoaded ToMapLoadedMessage(const std::string& path,
+                                                 const pipeline::LoadedMap& loaded);
 
 // A keyframe's loop detection (place_results; the frame id left to the caller).
 stereo_fabmap_slam::PlaceResult ToPlaceResultMessage(const pipeline::PlaceResult& result);

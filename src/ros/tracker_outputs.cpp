@@ -1,6 +1,8 @@
 #include "tracker_outputs.h"
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
@@ -103,6 +105,75 @@ std::optional<double> RelocalizeTimeout(double requested) {
   constexpr double kLongest = 60.0;
   if (!std::isfinite(requested) || requested < 0 || requested > kLongest) return std::nullopt;
   return requested > 0 ? requested : 1.0;
+}
+
+}  // namespace stereo_fabmap_slam::ros_wiring
+
+namespace stereo_fabmap_slam::ros_wiring {
+
+RelocalizeService::RelocalizeService(ros::NodeHandle& node, const TrackerOutputs& outputs,
+                                     Hooks hooks)
+    : outputs_(outputs), hooks_(std::move(hooks)) {
+  ros::NodeHandle service_node(node);
+  service_node.setCallbackQueue(&queue_);
+  server_ = service_node.advertiseService("relocalize", &RelocalizeService::OnRelocalize, this);
+  spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
+  spinner_->start();
+}
+
+RelocalizeService::~RelocalizeService() {
+  spinner_->stop();  // before the members its callback uses
+  server_.shutdown();
+}
+
+void RelocalizeService::Answer(const pipeline::UserRelocalization& answer) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!waiting_) return;  // its caller gave up
+    answer_ = answer;
+  }
+  answered_.notify_all();
+}
+
+bool RelocalizeService::OnRelocalize(stereo_fabmap_slam::Relocalize::Request& request,
+                                     stereo_fabmap_slam::Relocalize::Response& response) {
+  response.keyframe_id = -1;
+  const std::optional<double> timeout = RelocalizeTimeout(request.timeout);
+  if (!timeout) {
+    response.message = "timeout must be a number of seconds in [0, 60] (0: 1 s)";
+    return true;
+  }
+  if (hooks_.map_empty()) {
+    response.message = "map is empty";
+    return true;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (waiting_) {
+      response.message = "another relocalize call is waiting for a frame";
+      return true;
+    }
+    waiting_ = true;
+    answer_.reset();
+  }
+  // The hooks take the tracking stage's lock, which the tracking thread holds when it answers:
+  // never call them holding this one.
+  hooks_.ask(request.reanchor);
+  std::unique_lock<std::mutex> lock(mutex_);
+  const bool answered = answered_.wait_for(lock, std::chrono::duration<double>(*timeout),
+                                           [&] { return answer_.has_value(); });
+  const std::optional<pipeline::UserRelocalization> answer = answer_;
+  waiting_ = false;
+  lock.unlock();
+  if (!answered) {
+    hooks_.cancel();
+    char text[96];
+    std::snprintf(text, sizeof(text), "no stereo images arrived within %.1f s", *timeout);
+    response.message = text;
+    return true;
+  }
+  outputs_.FillResponse(*answer, &response);
+  return true;
 }
 
 }  // namespace stereo_fabmap_slam::ros_wiring

@@ -5,12 +5,18 @@
 // localization's map -> odom. The tracking stage tracks the camera in odom; this turns its
 // output into messages.
 
+#include <condition_variable>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
+#include <ros/callback_queue.h>
 #include <ros/node_handle.h>
 #include <ros/publisher.h>
+#include <ros/service_server.h>
+#include <ros/spinner.h>
 #include <stereo_fabmap_slam/Relocalize.h>
 #include <stereo_fabmap_slam/TrackedFrame.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -64,5 +70,36 @@ class TrackerOutputs {
 // seconds in [0, 60]: the service thread is one, and a caller waiting an hour for images that
 // never come would hold it from everyone else.
 std::optional<double> RelocalizeTimeout(double requested);
+
+// The relocalize service: on a queue and thread of its own (a call waits for the next frame,
+// which the tracking thread handles meanwhile, and must not hold a thread of the manager's pool),
+// one call at a time, answered by the tracking thread (Answer).
+class RelocalizeService {
+ public:
+  struct Hooks {
+    std::function<bool()> map_empty;
+    std::function<void(bool reanchor)> ask;  // the tracking stage's RequestRelocalization
+    std::function<void()> cancel;            // ... and CancelRelocalizationRequest
+  };
+  RelocalizeService(ros::NodeHandle& node, const TrackerOutputs& outputs, Hooks hooks);
+  ~RelocalizeService();
+  void Answer(const pipeline::UserRelocalization& answer);
+
+ private:
+  bool OnRelocalize(stereo_fabmap_slam::Relocalize::Request& request,
+                    stereo_fabmap_slam::Relocalize::Response& response);
+
+  const TrackerOutputs& outputs_;
+  Hooks hooks_;
+  std::mutex mutex_;
+  std::condition_variable answered_;
+  bool waiting_ = false;
+  std::optional<pipeline::UserRelocalization> answer_;
+  // The queue outlives the server advertised on it: a server destroyed after its queue locks the
+  // queue's freed mutex (boost::lock_error when the manager unloads the nodelet).
+  ros::CallbackQueue queue_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+  ros::ServiceServer server_;
+};
 
 }  // namespace stereo_fabmap_slam::ros_wiring

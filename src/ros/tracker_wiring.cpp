@@ -219,35 +219,4 @@ bool MappingProgress::WaitFor(std::int64_t keyframe, bool loop_closing,
   });
 }
 
-std::optional<pipeline::UserRelocalization> UserRequests::Ask(double timeout,
-                                                              const std::function<void()>& post,
-                                                              const std::function<void()>& cancel) {
-  std::unique_lock<std::mutex> lock(mutex_);
-  if (waiting_) {
-    pipeline::UserRelocalization busy;
-    busy.message = "another relocalize call is waiting for a frame";
-    return busy;
-  }
-  waiting_ = true;
-  answer_.reset();
-  post();
-  const bool answered = answered_.wait_for(lock, std::chrono::duration<double>(timeout),
-                                           [&] { return answer_.has_value(); });
-  waiting_ = false;
-  if (!answered) {
-    cancel();
-    return std::nullopt;
-  }
-  return answer_;
-}
-
-void UserRequests::Answer(const pipeline::UserRelocalization& answer) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!waiting_) return;  // its caller gave up
-    answer_ = answer;
-  }
-  answered_.notify_all();
-}
-
 }  // namespace stereo_fabmap_slam::ros_wiring

@@ -143,21 +143,4 @@ class MappingProgress {
   std::uint64_t relocalization_edges_ = 0;
 };
 
-// The relocalize service's wait for the next frame: one call at a time; the tracking thread
-// answers it.
-class UserRequests {
- public:
-  // Posts a request (`post`, run under this class's lock) and waits up to `timeout` seconds for
-  // the answer; nullopt on timeout, after `cancel`. Another call waiting: an answer saying so.
-  std::optional<pipeline::UserRelocalization> Ask(double timeout, const std::function<void()>& post,
-                                                  const std::function<void()>& cancel);
-  void Answer(const pipeline::UserRelocalization& answer);  // from the tracking thread
-
- private:
-  std::mutex mutex_;
-  std::condition_variable answered_;
-  bool waiting_ = false;
-  std::optional<pipeline::UserRelocalization> answer_;
-};
-
 }  // namespace stereo_fabmap_slam::ros_wiring

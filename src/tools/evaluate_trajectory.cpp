@@ -187,7 +187,8 @@ int main(int argc, char** argv) {
     if ((args->Value("gt-to-camera") ? 1 : 0) + (args->Value("gt-to-base") ? 1 : 0) +
             (args->Value("gt-to-rectified") ? 1 : 0) >
         1) {
-      throw std::invalid_argument("give one of --gt-to-camera, --gt-to-base and --gt-to-rectified");
+      throw std::invalid_argument(
+          "give at most one of --gt-to-camera, --gt-to-base and --gt-to-rectified, not several");
     }
     gt_path = *args->Value("gt");
     est_path = *args->Value("est");

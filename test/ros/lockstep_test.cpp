@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <ros/ros.h>
@@ -75,6 +76,30 @@ void RunDataset(const std::string& asl, const std::string& output, const std::st
       << log;
 }
 
+// The topics a recorded run needs (bag_to_run's input).
+const std::vector<std::string> kRunTopics = {
+    "/tracked_frames", "/keyframe_updates", "/keyframes", "/place_results",
+    "/map_graph",      "/map_loaded",       "/mode"};
+
+// Whether the master lists a subscriber of every topic of kRunTopics. rosbag's recorder registers
+// its subscriptions as it starts; it connects to each publisher when the master announces it,
+// which the lockstep player's start (all the graph's topics advertised, then a second) leaves
+// time for.
+bool RecorderSubscribed() {
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", request, response, payload, false)) return false;
+  std::set<std::string> subscribed;
+  XmlRpc::XmlRpcValue& subscribers = payload[1];
+  for (int i = 0; i < subscribers.size(); ++i) {
+    subscribed.insert(static_cast<std::string>(subscribers[i][0]));
+  }
+  for (const std::string& topic : kRunTopics) {
+    if (subscribed.count(topic) == 0) return false;
+  }
+  return true;
+}
+
 // The graph on the sequence in lockstep, until the bag ends; `extra`: more launch arguments.
 // With `recorded`, its topics are recorded into that bag too.
 void RunGraph(const Sequence& sequence, const std::string& output, const std::string& extra,
@@ -82,14 +107,18 @@ void RunGraph(const Sequence& sequence, const std::string& output, const std::st
   const std::string log_path = output + ".roslaunch.log";
   const std::string recorder_pid = output + ".record.pid";
   if (!recorded.empty()) {
+    std::string topics;
+    for (const std::string& topic : kRunTopics) topics += " " + topic;
     // rosbag's recorder itself (not the `rosbag record` script), so that SIGINT closes the bag.
-    ASSERT_EQ(std::system(("/usr/lib/rosbag/record -q -O " + recorded +
-                           " /tracked_frames /keyframes /keyframe_updates /place_results "
-                           "/map_graph /map_loaded /mode > /dev/null 2>&1 & echo $! > " +
-                           recorder_pid)
+    ASSERT_EQ(std::system(("/usr/lib/rosbag/record -q -O " + recorded + topics +
+                           " > /dev/null 2>&1 & echo $! > " + recorder_pid)
                               .c_str()),
               0);
-    ros::WallDuration(2.0).sleep();  // subscribed before the graph starts
+    const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(60.0);
+    while (!RecorderSubscribed() && ros::WallTime::now() < give_up) {
+      ros::WallDuration(0.1).sleep();
+    }
+    ASSERT_TRUE(RecorderSubscribed()) << "rosbag record did not subscribe within 60 s";
   }
   const int status = std::system(
       ("roslaunch --wait stereo_fabmap_slam euroc_bag.launch lockstep:=true exit_at_end:=true "
@@ -98,13 +127,14 @@ void RunGraph(const Sequence& sequence, const std::string& output, const std::st
        sequence.base_to_camera + "' output:=" + output + " " + extra + " > " + log_path + " 2>&1")
           .c_str());
   if (!recorded.empty()) {
+    // The graph's last messages may still be in the recorder's socket when roslaunch returns.
     ros::WallDuration(1.0).sleep();
-    const std::string pid = ReadTextFile(recorder_pid);
+    const long pid = std::stol(ReadTextFile(recorder_pid));
     // Interrupted, it writes the bag out and renames it from .active; wait for that.
-    std::system(("kill -INT " + pid + "; while kill -0 " + pid +
-                 " 2> /dev/null; do sleep 0.1; "
-                 "done")
-                    .c_str());
+    ASSERT_EQ(std::system(("kill -INT " + std::to_string(pid) + " && while kill -0 " +
+                           std::to_string(pid) + " 2> /dev/null; do sleep 0.1; done")
+                              .c_str()),
+              0);
   }
   const std::string log = ReadTextFile(log_path);
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << log;
@@ -207,7 +237,9 @@ void CheckBothDrivers(const Sequence& sequence, const std::string& folder, bool 
   EXPECT_EQ(JsonNumber(graph_summary, "pairs_skipped"), 0) << "lockstep skips nothing";
   const auto loops = AcceptedLoops(offline);
   EXPECT_EQ(AcceptedLoops(graph), loops);
-  if (expect_loops) EXPECT_GT(loops.size(), 10u);
+  if (expect_loops) {
+    EXPECT_GT(loops.size(), 10u);
+  }
   // Trajectories: 0.5 mm RMS with no alignment is the bound the two drivers must meet; they
   // run the same stages in the same order, and meet it to the last printed digit.
   const double trajectory = RmsDifference(offline + "/trajectory.txt", graph + "/trajectory.txt");

@@ -44,10 +44,10 @@ struct TrackerOptions {
   // [s] After a frame that cannot be tracked but still shows the local map (motion blur, a
   // close-up, a stretch a busy tracker skipped), the map is kept and the next frames are searched
   // in it, by projection and by descriptor, for this long after the last tracked frame; only
-  // then does a new map (a new piece of odometry) start. A lost frame has no pose either way, but
-  // a kept map keeps odom continuous, where a new piece needs relocalization (or a loop) to join
+  // then does a new segment of odometry start. A lost frame has no pose either way, but
+  // a kept map keeps odom continuous, where a new segment needs relocalization (or a loop) to join
   // the map again. A frame that shows nothing of the map (a kidnapped camera) starts the new
-  // piece at once. The descriptor search needs no prediction, so it finds the camera wherever it
+  // segment at once. The descriptor search needs no prediction, so it finds the camera wherever it
   // still sees the local map's keyframes: half a second is 0.5-1 m and at most 0.5 rad at the
   // speeds of EuRoC's MAV and of a hand-held camera, within that view; the same as
   // max_prediction_gap, where the motion model stops extrapolating. ORB-SLAM3's "recently lost"

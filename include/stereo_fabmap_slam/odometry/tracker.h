@@ -35,7 +35,7 @@ struct TrackingResult {
   int inliers = 0;  // of those, consistent with the pose
   // Of T_world_camera (right perturbation, translation then rotation): how well this frame's
   // inliers pin the pose down relative to the local map (geometry::StereoPoseCovariance); 1e6
-  // on the diagonal where the pose is not an estimate (a new map's first frame).
+  // on the diagonal where the pose is not an estimate (the first frame of a new segment).
   geometry::PoseCovariance covariance = geometry::PoseCovariance::Identity();
   // The pose relative to a keyframe, so that the trajectory follows later keyframe corrections.
   std::int64_t reference_keyframe = -1;
@@ -70,9 +70,10 @@ class Tracker {
   TrackingResult Track(double timestamp, features::StereoFeatures features, int frames_skipped = 0);
   // Optimised keyframe poses and points from the backend.
   void ApplyUpdate(const map::KeyframeUpdate& update);
-  // Forget the map and the motion (e.g. time went backwards); the next frame starts a new map.
+  // Forget the local map and the motion (e.g. time went backwards); the next frame starts a new
+  // segment.
   void Reset();
-  // Forget the local map but not the motion: the next frame starts a new piece of map where the
+  // Forget the local map but not the motion: the next frame starts a new local map where the
   // odometry predicts it, so odom stays continuous (e.g. after a map was loaded whose keyframe
   // ids the local map's may share).
   void StartNewLocalMap() { local_map_.Clear(); }
@@ -110,7 +111,7 @@ class Tracker {
   void StartMap(double timestamp, features::StereoFeatures features,
                 const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
   // The exit of a frame that could not be tracked against a map (there is none, or tracking
-  // failed): a new map starts at the predicted pose if the frame has enough stereo points, and
+  // failed): a new segment starts at the predicted pose if the frame has enough stereo points, and
   // the frame is lost otherwise.
   TrackingResult StartOver(double timestamp, features::StereoFeatures features,
                            const Eigen::Isometry3d& predicted, TrackingResult result);
