@@ -83,19 +83,21 @@ vocabulary: deps $(WS)/build/Makefile
 	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/detector_model.yaml
 
 # Builds the test programs in parallel, then runs the rostests one at a time (each starts its
-# own master), the unit tests (gtest, no ROS, no timing) JOBS at a time (two: 380 s against
-# 493 s one at a time, on two cores), then the sanitizer build's unit tests (ASan, LSan, UBSan),
-# two at a time; and closes with one line "tests: N passed, N failed, N skipped" over all of
-# them. The rendered sequences the rostests share with the unit tests (SharedSyntheticSequence,
-# 1.7 GB) are removed after.
-# The sanitizer build compiles at the lowest priority (nice 19) beside the other rostests and
-# the unit tests: those rostests play bags in real time and leave most of a core idle, which the
-# compiler takes (fresh-clone runs on a slow machine, apt done: 25.3 min with the build before
-# the tests, 22.6 min beside them; docs/benchmarks.md). The load and restart rostests run first,
-# alone: beside the compiler, even at nice 19, the tracker took 80 ms a pair instead of 9 and the
-# 5x bag lost the track.
+# own master) and the unit tests (gtest, no ROS, no timing) JOBS at a time (two: 380 s against
+# 493 s one at a time, on two cores); beside them the sanitizer build and its unit tests (ASan,
+# LSan, UBSan), two at a time; and closes with one line "tests: N passed, N failed, N skipped"
+# over all of them. The rendered sequences the rostests share with the unit tests
+# (SharedSyntheticSequence, 1.7 GB) are removed after.
+# The sanitizer build compiles and runs its tests at the lowest priority (nice 19) beside the
+# other rostests and the unit tests: those rostests play bags in real time and leave most of a
+# core idle, which it takes (fresh-clone runs on a slow machine, apt done: 25.3 min with the
+# build before the tests, 22.6 min beside them; its tests after everything else left a core
+# idle for two minutes; docs/benchmarks.md). The load and restart rostests run first, alone:
+# beside the compiler, even at nice 19, the tracker took 80 ms a pair instead of 9 and the 5x
+# bag lost the track.
 # A failed sanitizer build is a failed test case with the end of its log.
 SANITIZE_LOG := $(REPO)/build/sanitize-build.log
+SANITIZE_TESTS_LOG := $(REPO)/build/sanitizer-tests.log
 ROSTESTS := $(sort $(basename $(notdir $(wildcard test/ros/*.test))))
 ALONE_ROSTESTS := load restart
 rostest_targets = $(foreach t,$(1),run_tests_stereo_fabmap_slam_rostest_test_ros_$(t).test)
@@ -104,15 +106,16 @@ test: build
 	rm -rf $(WS)/build/test_results
 	-$(CMAKE_BUILD) -j1 $(call rostest_targets,$(ALONE_ROSTESTS))
 	rm -f $(SANITIZE_LOG).status
-	@echo "Building the sanitizer build at nice 19 beside the tests (log: $(SANITIZE_LOG))"
+	@echo "Building and running the sanitizer build at nice 19 beside the tests (logs: $(SANITIZE_LOG), $(SANITIZE_TESTS_LOG))"
 	@( nice -n 19 $(MAKE) --no-print-directory sanitize-build > $(SANITIZE_LOG) 2>&1; \
-	   echo $$? > $(SANITIZE_LOG).status ) & \
+	   echo $$? > $(SANITIZE_LOG).status; \
+	   nice -n 19 bash scripts/sanitizer_tests.sh $(SANITIZE)/devel/lib/stereo_fabmap_slam \
+	     $(WS)/build/test_results/sanitizers $(SANITIZE_LOG) > $(SANITIZE_TESTS_LOG) 2>&1 ) & \
 	  $(CMAKE_BUILD) -j1 $(call rostest_targets,$(filter-out $(ALONE_ROSTESTS),$(ROSTESTS))); \
 	  $(CMAKE_BUILD) -j$(JOBS) run_tests_stereo_fabmap_slam_gtest; \
-	  echo "Waiting for the sanitizer build"; wait; true
+	  echo "Waiting for the sanitizer build and its tests"; wait; true
+	@cat $(SANITIZE_TESTS_LOG)
 	rm -rf $(WS)/build/test_sequences
-	-bash scripts/sanitizer_tests.sh $(SANITIZE)/devel/lib/stereo_fabmap_slam \
-	  $(WS)/build/test_results/sanitizers $(SANITIZE_LOG)
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
 
 # The sanitizer build: a second build folder, Debug flags with ASan and UBSan, the ROS-free part

@@ -49,8 +49,8 @@ Eigen::Isometry3d FromOpenCv(const cv::Mat& rotation_vector, const cv::Mat& tran
   return T;
 }
 
-double ReprojectionError(const PnpCorrespondence& c, const Eigen::Isometry3d& T_camera_world,
-                         const geometry::StereoCamera& camera) {
+double PixelReprojectionError(const PnpCorrespondence& c, const Eigen::Isometry3d& T_camera_world,
+                              const geometry::StereoCamera& camera) {
   const Eigen::Vector3d p = T_camera_world * c.world;
   if (p.z() <= 1e-6) return std::numeric_limits<double>::infinity();
   return (Eigen::Vector2d(camera.fx * p.x() / p.z() + camera.cx,
@@ -64,7 +64,7 @@ std::vector<int> Inliers(const std::vector<PnpCorrespondence>& correspondences,
                          const geometry::StereoCamera& camera, double threshold) {
   std::vector<int> inliers;
   for (int i = 0; i < static_cast<int>(correspondences.size()); ++i) {
-    if (ReprojectionError(correspondences[i], T_camera_world, camera) <= threshold)
+    if (PixelReprojectionError(correspondences[i], T_camera_world, camera) <= threshold)
       inliers.push_back(i);
   }
   return inliers;

@@ -8,8 +8,8 @@
 namespace stereo_fabmap_slam::place_recognition {
 namespace {
 
-constexpr char kMagic[9] = "SFSPLACE";
-constexpr std::uint32_t kVersion = 1;
+constexpr char kPlaceDatabaseMagic[9] = "SFSPLACE";
+constexpr std::uint32_t kPlaceDatabaseVersion = 1;
 
 }  // namespace
 
@@ -115,11 +115,11 @@ void PlaceDatabase::Save(const std::string& path) const {
     writer.PutVector(place.words);
     writer.PutVector(place.hits);
   }
-  io::WriteBinaryFile(path, kMagic, kVersion, writer.bytes());
+  io::WriteBinaryFile(path, kPlaceDatabaseMagic, kPlaceDatabaseVersion, writer.bytes());
 }
 
 PlaceDatabase PlaceDatabase::Load(const std::string& path) {
-  io::BinaryReader reader = io::ReadBinaryFile(path, kMagic, kVersion);
+  io::BinaryReader reader = io::ReadBinaryFile(path, kPlaceDatabaseMagic, kPlaceDatabaseVersion);
   const auto vocabulary = reader.Get<std::int32_t>();
   // The index has an entry per word, allocated up front: a corrupt size must not ask for
   // gigabytes. FAB-MAP vocabularies have thousands to a hundred thousand words (the default

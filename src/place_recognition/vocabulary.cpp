@@ -12,8 +12,8 @@
 namespace stereo_fabmap_slam::place_recognition {
 namespace {
 
-constexpr char kMagic[9] = "SFSVOCAB";
-constexpr std::uint32_t kVersion = 1;
+constexpr char kVocabularyMagic[9] = "SFSVOCAB";
+constexpr std::uint32_t kVocabularyVersion = 1;
 
 // Clusters the rows `members` of `data` into at most k groups; returns each member's group and
 // fills `centres` (one row per group). Binary rows: k-majority (Hamming distance, bitwise
@@ -224,11 +224,11 @@ void Vocabulary::Save(const std::string& path) const {
       continuous.data, continuous.data + continuous.total() * continuous.elemSize()));
   writer.PutVector(nodes_);
   writer.Put<std::int32_t>(word_count_);
-  io::WriteBinaryFile(path, kMagic, kVersion, writer.bytes());
+  io::WriteBinaryFile(path, kVocabularyMagic, kVocabularyVersion, writer.bytes());
 }
 
 Vocabulary Vocabulary::Load(const std::string& path) {
-  io::BinaryReader reader = io::ReadBinaryFile(path, kMagic, kVersion);
+  io::BinaryReader reader = io::ReadBinaryFile(path, kVocabularyMagic, kVocabularyVersion);
   Vocabulary vocabulary;
   const auto type = reader.Get<std::int32_t>();
   const auto rows = reader.Get<std::int32_t>();
