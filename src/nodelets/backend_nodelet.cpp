@@ -11,10 +11,12 @@
 #include <string>
 #include <thread>
 #include <variant>
+#include <vector>
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 #include <std_msgs/String.h>
 #include <stereo_fabmap_slam/MapLoaded.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -44,13 +46,11 @@ class BackendNodelet : public nodelet::Nodelet {
   struct LoadMap {
     std::string path;
   };
-  struct Correction {
-    Eigen::Isometry3d T_map_odom;
-  };
   // Every input, in the order it arrived: the stage takes them so.
   using Input =
       std::variant<stereo_fabmap_slam::KeyframeConstPtr, stereo_fabmap_slam::PlaceResultConstPtr,
-                   stereo_fabmap_slam::LoopEdgeConstPtr, LoadMap, pipeline::SlamMode, Correction>;
+                   stereo_fabmap_slam::LoopEdgeConstPtr, LoadMap, pipeline::SlamMode,
+                   pipeline::LocalizationCorrectionInput>;
 
   void onInit() override;
   void Push(Input input) {
@@ -61,8 +61,9 @@ class BackendNodelet : public nodelet::Nodelet {
     wake_.notify_one();
   }
   void Work();
-  // Returns whether the map changed (map_graph is published again).
-  bool Apply(const Input& input, bool optimise, ros::Time* stamp);
+  // The stage's input of a message; throws for a map file that cannot be read.
+  static pipeline::MappingInput Convert(const Input& input);
+  static std_msgs::Header HeaderOf(const Input& input);  // a keyframe's, else empty
   void OnTfTimer(const ros::WallTimerEvent&);
 
   std::string map_frame_, odom_frame_;
@@ -76,7 +77,7 @@ class BackendNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   std::condition_variable wake_;
   // Never bounded by dropping: a keyframe missing from the map would leave a hole in the graph.
-  // Under load the worker adjusts the newest of the waiting keyframes together (see Work()).
+  // Under load the stage adjusts the newest of the waiting keyframes together (MappingStage::Take).
   std::deque<Input> inputs_;
   bool stopping_ = false;
   std::thread worker_;
@@ -123,7 +124,8 @@ void BackendNodelet::onInit() {
       });
   correction_subscriber_ = node.subscribe<geometry_msgs::TransformStamped>(
       "map_to_odom_correction", 10, [this](const geometry_msgs::TransformStampedConstPtr& m) {
-        Push(Correction{ros_conversions::FromTransformMessage(m->transform)});
+        Push(pipeline::LocalizationCorrectionInput{
+            ros_conversions::FromTransformMessage(m->transform)});
       });
   // map -> odom is broadcast steadily, not only when it changes, so that tf can look up any
   // recent time without extrapolating. A user whose map -> odom comes from elsewhere turns the
@@ -143,44 +145,33 @@ void BackendNodelet::Work() {
       if (stopping_) return;
       waiting.swap(inputs_);
     }
-    // Every keyframe enters the map; only the newest of those waiting is followed by a bundle
-    // adjustment, whose window covers the others.
-    std::size_t keyframes = 0, seen = 0;
+    // The stage takes everything that waited at once (MappingStage::Take: under load it adjusts
+    // the newest of the waiting keyframes together).
+    std::vector<pipeline::MappingInput> batch;
+    std::vector<std_msgs::Header> headers;  // of the batch's inputs, for the keyframe updates
     for (const Input& input : waiting) {
-      keyframes += std::holds_alternative<stereo_fabmap_slam::KeyframeConstPtr>(input) ? 1 : 0;
-    }
-    if (keyframes > 1) {
-      NODELET_WARN_THROTTLE(5,
-                            "bundle adjustment falls behind: %zu keyframes added in one "
-                            "optimisation",
-                            keyframes);
-    }
-    bool changed = false;
-    ros::Time stamp;
-    const std::uint64_t optimisations = stage_->optimisations();
-    for (const Input& input : waiting) {
-      const bool keyframe = std::holds_alternative<stereo_fabmap_slam::KeyframeConstPtr>(input);
-      seen += keyframe ? 1 : 0;
       try {
-        changed = Apply(input, !keyframe || seen == keyframes, &stamp) || changed;
+        batch.push_back(Convert(input));
+        headers.push_back(HeaderOf(input));
       } catch (const std::exception& error) {
-        NODELET_WARN_THROTTLE(5, "input skipped: %s", error.what());
+        NODELET_ERROR("input skipped: %s", error.what());
       }
     }
-    for (const std::string& refused : stage_->TakeRefusedEdges())
-      NODELET_WARN("%s", refused.c_str());
-    if (stage_->optimisations() > optimisations) {
-      const backend::PoseGraphSummary& summary = stage_->last_optimisation();
-      NODELET_INFO("pose graph: %zu of %zu keyframes optimised (%s) in %d iterations",
-                   summary.moved_keyframes, stage_->pose_graph().size(),
-                   summary.local ? "near loops that agree with the map" : "whole graph",
-                   summary.iterations);
+    const pipeline::MappingBatchResult result = stage_->Take(batch);
+    for (const std::string& warning : result.warnings) NODELET_WARN("%s", warning.c_str());
+    for (const std::string& news : result.news) NODELET_INFO("%s", news.c_str());
+    ros::Time stamp;
+    for (const auto& [index, mapped] : result.keyframes) {
+      stereo_fabmap_slam::KeyframeUpdate update = ros_conversions::ToMappedKeyframeMessage(mapped);
+      update.header = headers[index];
+      update_publisher_.publish(update);
+      stamp = headers[index].stamp;
     }
     {
       std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
       map_to_odom_ = stage_->MapToOdom();
     }
-    if (!changed) continue;
+    if (!result.map_changed) continue;
     stereo_fabmap_slam::MapGraph message = ros_conversions::ToMapGraphMessage(*stage_);
     message.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
     message.header.frame_id = map_frame_;
@@ -188,53 +179,31 @@ void BackendNodelet::Work() {
   }
 }
 
-bool BackendNodelet::Apply(const Input& input, bool optimise, ros::Time* stamp) {
+pipeline::MappingInput BackendNodelet::Convert(const Input& input) {
   if (const auto* keyframe = std::get_if<stereo_fabmap_slam::KeyframeConstPtr>(&input)) {
-    const stereo_fabmap_slam::Keyframe& message = **keyframe;
-    // A Backend (re)started while the tracker runs: say what this map does not have.
-    if (stage_->empty() && !stage_->camera() && message.id > 0 && stage_->loaded_below() == 0) {
-      NODELET_WARN(
-          "first keyframe received is %lu: the keyframes before it are not in this "
-          "Backend's map (restarted while the tracker ran?); optimising from here, "
-          "map -> odom starts at identity",
-          static_cast<unsigned long>(message.id));
-    }
-    const pipeline::MappedKeyframe mapped =
-        stage_->AddKeyframe(ros_conversions::FromKeyframeMessage(message),
-                            ros_conversions::CameraOfKeyframe(message), optimise);
-    stereo_fabmap_slam::KeyframeUpdate update = ros_conversions::ToMappedKeyframeMessage(mapped);
-    update.header = message.header;
-    update_publisher_.publish(update);
-    *stamp = message.header.stamp;
-    return true;
+    return pipeline::KeyframeInput{ros_conversions::FromKeyframeMessage(**keyframe),
+                                   ros_conversions::CameraOfKeyframe(**keyframe)};
   }
   if (const auto* place = std::get_if<stereo_fabmap_slam::PlaceResultConstPtr>(&input)) {
     const pipeline::PlaceResult result = ros_conversions::FromPlaceResultMessage(**place);
-    stage_->ApplyLoopDetection(result.keyframe_id, result.detection.loop);
-    return true;
+    return pipeline::LoopDetectionInput{result.keyframe_id, result.detection.loop};
   }
   if (const auto* edge = std::get_if<stereo_fabmap_slam::LoopEdgeConstPtr>(&input)) {
-    stage_->AddEdge(ros_conversions::FromLoopEdgeMessage(**edge),
-                    backend::PoseGraphEdgeType::kRelocalization);
-    return true;
+    return pipeline::RelocalizationEdgeInput{ros_conversions::FromLoopEdgeMessage(**edge)};
   }
   if (const auto* load = std::get_if<LoadMap>(&input)) {
     // The LoopDetector checked the file; the graph is rebuilt from the same file.
-    try {
-      stage_->Load(map::LoadMapFile(load->path));
-      NODELET_INFO("pose graph of %s: %zu keyframes", load->path.c_str(),
-                   stage_->pose_graph().size());
-    } catch (const std::exception& error) {
-      NODELET_ERROR("map %s not loaded into the pose graph: %s", load->path.c_str(), error.what());
-    }
-    return true;
+    return pipeline::LoadedMapInput{map::LoadMapFile(load->path), load->path};
   }
-  if (const auto* mode = std::get_if<pipeline::SlamMode>(&input)) {
-    stage_->SetMode(*mode);
-    return false;
+  if (const auto* mode = std::get_if<pipeline::SlamMode>(&input)) return *mode;
+  return std::get<pipeline::LocalizationCorrectionInput>(input);
+}
+
+std_msgs::Header BackendNodelet::HeaderOf(const Input& input) {
+  if (const auto* keyframe = std::get_if<stereo_fabmap_slam::KeyframeConstPtr>(&input)) {
+    return (*keyframe)->header;
   }
-  stage_->SetLocalizationCorrection(std::get<Correction>(input).T_map_odom);
-  return false;
+  return std_msgs::Header();
 }
 
 void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {

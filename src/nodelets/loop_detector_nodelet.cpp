@@ -210,30 +210,19 @@ bool LoopDetectorNodelet::SetMode(const std::string& name) {
 
 bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
                                        stereo_fabmap_slam::DetectLoop::Response& response) {
+  pipeline::LoopQuery query;
+  query.stored_id = request.keyframe_id;
+  query.add = request.add_to_map;
   std::lock_guard<std::mutex> lock(mutex_);
   try {
-    pipeline::PlaceStage* stage = stage_.get();
-    place_recognition::LoopDetection detection;
-    if (request.keyframe_id >= 0) {
-      if (stage == nullptr || !stage->detector().database().Contains(request.keyframe_id)) {
-        response.message = "keyframe " + std::to_string(request.keyframe_id) + " is not in the map";
-        return true;
-      }
-      detection = stage->DetectLoop(request.keyframe_id).detection;
-    } else if (request.keyframe.place_descriptors.empty() || request.keyframe.u.empty()) {
-      response.message = "the keyframe has no descriptors";
-      return true;
-    } else {
-      stage = &stage_.For(ros_conversions::CameraOfKeyframe(request.keyframe));
-      if (request.add_to_map && stage->detector().database().Contains(request.keyframe.id)) {
-        response.message =
-            "keyframe " + std::to_string(request.keyframe.id) + " is in the map already";
-        return true;
-      }
-      detection =
-          stage->Detect(ros_conversions::FromKeyframeMessage(request.keyframe), request.add_to_map);
-    }
-    ros_wiring::FillDetectLoopResponse(detection, &response);
+    if (query.stored_id < 0)
+      query.keyframe = ros_conversions::FromKeyframeMessage(request.keyframe);
+    response.message = pipeline::LoopQueryRefusal(query, stage_.get());
+    if (!response.message.empty()) return true;
+    pipeline::PlaceStage& stage =
+        query.stored_id >= 0 ? *stage_.get()
+                             : stage_.For(ros_conversions::CameraOfKeyframe(request.keyframe));
+    ros_wiring::FillDetectLoopResponse(stage.Answer(query), &response);
   } catch (const std::exception& error) {
     response.success = false;
     response.message = error.what();

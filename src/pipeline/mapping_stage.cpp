@@ -48,6 +48,80 @@ MappingStage::MappingStage(const backend::BundleAdjustmentOptions& bundle_adjust
       clock_(std::move(clock)),
       graph_(pose_graph) {}
 
+MappingBatchResult MappingStage::Take(const std::vector<MappingInput>& batch) {
+  MappingBatchResult result;
+  std::size_t keyframes = 0;
+  for (const MappingInput& input : batch) {
+    keyframes += std::holds_alternative<KeyframeInput>(input) ? 1 : 0;
+  }
+  if (keyframes > 1) {
+    result.warnings.push_back("bundle adjustment falls behind: " + std::to_string(keyframes) +
+                              " keyframes added in one optimisation");
+  }
+  const std::uint64_t optimisations = optimisations_;
+  std::size_t seen = 0;
+  for (std::size_t index = 0; index < batch.size(); ++index) {
+    const bool keyframe = std::holds_alternative<KeyframeInput>(batch[index]);
+    seen += keyframe ? 1 : 0;
+    try {
+      result.map_changed |= TakeOne(batch[index], index, !keyframe || seen == keyframes, &result);
+    } catch (const std::exception& error) {  // std::invalid_argument, io::InputError
+      result.warnings.push_back(std::string("input skipped: ") + error.what());
+    }
+  }
+  for (std::string& refused : TakeRefusedEdges()) result.warnings.push_back(std::move(refused));
+  if (optimisations_ > optimisations) {
+    result.news.push_back(
+        "pose graph: " + std::to_string(last_optimisation_.moved_keyframes) + " of " +
+        std::to_string(graph_.size()) + " keyframes optimised (" +
+        (last_optimisation_.local ? "near loops that agree with the map" : "whole graph") +
+        ") in " + std::to_string(last_optimisation_.iterations) + " iterations");
+  }
+  return result;
+}
+
+bool MappingStage::TakeOne(const MappingInput& input, std::size_t index, bool optimise,
+                           MappingBatchResult* result) {
+  if (const auto* keyframe = std::get_if<KeyframeInput>(&input)) {
+    // A mapping stage started while the tracking ran (a Backend restarted): say what its map
+    // does not have.
+    if (!camera_ && empty() && keyframe->keyframe.id > 0 && loaded_below_ == 0) {
+      result->warnings.push_back(
+          "first keyframe received is " + std::to_string(keyframe->keyframe.id) +
+          ": the keyframes before it are not in this map (the mapping stage started while the "
+          "tracking ran?); optimising from here, map -> odom starts at identity");
+    }
+    result->keyframes.emplace_back(index,
+                                   AddKeyframe(keyframe->keyframe, keyframe->camera, optimise));
+    return true;
+  }
+  if (const auto* detection = std::get_if<LoopDetectionInput>(&input)) {
+    ApplyLoopDetection(detection->keyframe_id, detection->loop);
+    return true;
+  }
+  if (const auto* edge = std::get_if<RelocalizationEdgeInput>(&input)) {
+    AddEdge(edge->edge, backend::PoseGraphEdgeType::kRelocalization);
+    return true;
+  }
+  if (const auto* loaded = std::get_if<LoadedMapInput>(&input)) {
+    try {
+      Load(loaded->saved);
+    } catch (const io::InputError& error) {
+      throw io::InputError("map " + loaded->name +
+                           " not loaded into the pose graph: " + error.what());
+    }
+    result->news.push_back("pose graph of " + loaded->name + ": " + std::to_string(graph_.size()) +
+                           " keyframes");
+    return true;
+  }
+  if (const auto* mode = std::get_if<SlamMode>(&input)) {
+    SetMode(*mode);
+    return false;
+  }
+  SetLocalizationCorrection(std::get<LocalizationCorrectionInput>(input).T_map_odom);
+  return false;
+}
+
 MappedKeyframe MappingStage::AddKeyframe(const map::Keyframe& keyframe,
                                          const geometry::StereoCamera& camera, bool optimise) {
   MappedKeyframe mapped;

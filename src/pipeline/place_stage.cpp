@@ -63,8 +63,29 @@ PlaceResult PlaceStage::DetectLoop(std::int64_t keyframe_id) {
   return result;
 }
 
-place_recognition::LoopDetection PlaceStage::Detect(map::Keyframe keyframe, bool add) {
-  return detector_.Process(std::move(keyframe), add);
+std::string LoopQueryRefusal(const LoopQuery& query, const PlaceStage* stage) {
+  const auto holds = [&](std::int64_t id) {
+    return stage != nullptr && stage->detector().database().Contains(id);
+  };
+  if (query.stored_id >= 0) {
+    return holds(query.stored_id)
+               ? ""
+               : "keyframe " + std::to_string(query.stored_id) + " is not in the map";
+  }
+  if (query.keyframe.place_descriptors.empty() || query.keyframe.features.size() == 0) {
+    return "the keyframe has no descriptors";
+  }
+  if (query.add && holds(query.keyframe.id)) {
+    return "keyframe " + std::to_string(query.keyframe.id) + " is in the map already";
+  }
+  return "";
+}
+
+place_recognition::LoopDetection PlaceStage::Answer(const LoopQuery& query) {
+  const std::string refusal = LoopQueryRefusal(query, this);
+  if (!refusal.empty()) throw std::invalid_argument(refusal);
+  if (query.stored_id >= 0) return DetectLoop(query.stored_id).detection;
+  return detector_.Process(query.keyframe, query.add);
 }
 
 RelocalizationAnswer PlaceStage::Relocalize(const RelocalizationRequest& request,

@@ -151,7 +151,7 @@ TEST_F(Restart, BackendUnloadedAndLoadedAgainWhileTheBagPlays) {
   bool said_what_it_lost = false;
   for (const std::string& message : log_) {
     said_what_it_lost |=
-        message.find("the keyframes before it are not in this Backend's map") != std::string::npos;
+        message.find("the keyframes before it are not in this map") != std::string::npos;
   }
   EXPECT_TRUE(said_what_it_lost) << ReadTextFile(LaunchLogPath());
 }

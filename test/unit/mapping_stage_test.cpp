@@ -158,5 +158,70 @@ TEST_F(MappingStageTest, ALoadedMapDropsOlderKeyframesAndTheNextStartsASegment) 
   EXPECT_EQ(stage_.pose_graph().size(), 6u);
 }
 
+// The Backend's way of taking what waited while it worked: every keyframe joins, one bundle
+// adjustment after the newest covers them all, the other inputs are taken in their order, and
+// an input that cannot be taken is said and skipped.
+TEST_F(MappingStageTest, ABatchAddsEveryKeyframeAndAdjustsOnlyAfterTheNewest) {
+  stage_.Take({pipeline::KeyframeInput{Keyframe(0), kTestCamera}});
+  geometry::StereoCamera other = kTestCamera;
+  other.baseline *= 1.5;
+  const pipeline::MappingBatchResult result = stage_.Take({
+      pipeline::KeyframeInput{Keyframe(1), kTestCamera},
+      pipeline::KeyframeInput{Keyframe(2), kTestCamera},
+      pipeline::LoopDetectionInput{1, std::nullopt},
+      pipeline::KeyframeInput{Keyframe(3), other},  // refused: the map's rig is another
+      pipeline::KeyframeInput{Keyframe(4), kTestCamera},
+  });
+  ASSERT_EQ(result.keyframes.size(), 3u) << "one answer per keyframe taken";
+  EXPECT_EQ(result.keyframes[0].first, 0u);
+  EXPECT_EQ(result.keyframes[1].first, 1u);
+  EXPECT_EQ(result.keyframes[2].first, 4u) << "indices into the batch";
+  for (const auto& [index, mapped] : result.keyframes) EXPECT_TRUE(mapped.in_map_graph);
+  EXPECT_TRUE(result.keyframes[0].second.update.keyframe_poses.empty()) << "not adjusted";
+  EXPECT_TRUE(result.keyframes[1].second.update.keyframe_poses.empty()) << "not adjusted";
+  // The one adjustment moves every free keyframe of the window: all but the fixed first.
+  const map::KeyframeUpdate& last = result.keyframes[2].second.update;
+  std::vector<std::int64_t> moved;
+  for (const auto& [id, pose] : last.keyframe_poses) moved.push_back(id);
+  EXPECT_EQ(moved, (std::vector<std::int64_t>{1, 2, 4}));
+  EXPECT_EQ(stage_.last_closed_keyframe(), 1);
+  EXPECT_TRUE(result.map_changed);
+  const auto said = [&](const std::string& text) {
+    for (const std::string& warning : result.warnings) {
+      if (warning.find(text) != std::string::npos) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(said("4 keyframes added in one optimisation"));
+  EXPECT_TRUE(said("input skipped: keyframe 3 was measured with another camera"));
+  EXPECT_FALSE(said("first keyframe received"));
+
+  // Mode and localization's map -> odom change no map.
+  const pipeline::MappingBatchResult mode =
+      stage_.Take({pipeline::SlamMode::kLocalization, pipeline::LocalizationCorrectionInput{}});
+  EXPECT_FALSE(mode.map_changed);
+  EXPECT_EQ(stage_.mode(), pipeline::SlamMode::kLocalization);
+}
+
+TEST_F(MappingStageTest, AStageStartedWhileTheTrackingRanSaysWhatItsMapLacks) {
+  const pipeline::MappingBatchResult result =
+      stage_.Take({pipeline::KeyframeInput{Keyframe(7), kTestCamera}});
+  ASSERT_EQ(result.warnings.size(), 1u);
+  EXPECT_NE(result.warnings[0].find("first keyframe received is 7: the keyframes before it are "
+                                    "not in this map"),
+            std::string::npos)
+      << result.warnings[0];
+  // A map whose graph cannot be rebuilt is refused with the file's name; the graph stays.
+  map::SavedMap broken;
+  broken.camera = kTestCamera;
+  broken.edges.push_back({Edge(2, 2, 0.0), false});
+  const pipeline::MappingBatchResult load =
+      stage_.Take({pipeline::LoadedMapInput{broken, "broken.map"}});
+  ASSERT_EQ(load.warnings.size(), 1u);
+  EXPECT_NE(load.warnings[0].find("map broken.map not loaded into the pose graph"),
+            std::string::npos);
+  EXPECT_EQ(stage_.pose_graph().size(), 1u);
+}
+
 }  // namespace
 }  // namespace stereo_fabmap_slam::test

@@ -13,7 +13,6 @@
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/datasets/route.h"
-#include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 #include "test_support.h"
@@ -31,16 +30,12 @@ double Median(std::vector<double> values) {
 
 class RenderedRoute : public ::testing::Test {
  protected:
+  // The loop the loop-closing tests and rostests map (rendered once for all of them): a lap and
+  // about seven seconds of the second.
   static void SetUpTestSuite() {
-    directory_ = new TemporaryDirectory();
-    datasets::SyntheticSequenceOptions options;
-    options.route = "loop";
-    options.seed = 4;  // a hall no other test renders
-    options.seconds = 36;
-    datasets::SyntheticSequence(options).Write(directory_->path());
-    lap_time_ = datasets::Route(datasets::RouteKind::kLoop, options.hall).lap_time();
+    directory_ = SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, "loop", 34, 1);
+    lap_time_ = datasets::Route(datasets::RouteKind::kLoop, datasets::HallOptions()).lap_time();
   }
-  static void TearDownTestSuite() { delete directory_; }
 
   // A SLAM with loop closing and relocalization, fed the frames with timestamps in [0, until).
   struct Slam {
@@ -69,7 +64,7 @@ class RenderedRoute : public ::testing::Test {
     const place_recognition::PlaceRecognitionOptions place_options =
         place_recognition::LoadPlaceRecognitionOptions(kFabmapConfig, options.front_end.features);
     options.front_end.place_features = place_options.features;
-    datasets::EurocSequence sequence = datasets::EurocSequence::Open(directory_->path());
+    datasets::EurocSequence sequence = datasets::EurocSequence::Open(directory_);
     camera::StereoRectifier rectifier =
         camera::StereoRectifier::FromCalibration(sequence.calibration(), options.rectification);
     auto slam = std::unique_ptr<Slam>(
@@ -91,11 +86,11 @@ class RenderedRoute : public ::testing::Test {
     return slam;
   }
 
-  static TemporaryDirectory* directory_;
+  static std::string directory_;
   static double lap_time_;
 };
 
-TemporaryDirectory* RenderedRoute::directory_ = nullptr;
+std::string RenderedRoute::directory_;
 double RenderedRoute::lap_time_ = 0;
 
 TEST_F(RenderedRoute, SecondLapIsFoundInTheFirstLapsMap) {
@@ -125,7 +120,9 @@ TEST_F(RenderedRoute, SecondLapIsFoundInTheFirstLapsMap) {
   RecordProperty("found",
                  std::to_string(translation_errors.size()) + "/" + std::to_string(attempts));
   // The second lap retraces the first: nearly all of its views are found.
-  EXPECT_GT(found_share, 0.9);  // measured: all 45 (seed 4)
+  // Measured: 35 of 35 here (and 45 of 45 on a 36 s loop of seed 4); 0.9 leaves room for three
+  // views of 35 that a hall with other photos may not find.
+  EXPECT_GT(found_share, 0.9);
   ASSERT_FALSE(translation_errors.empty());
   RecordProperty("median_translation_error_m", std::to_string(Median(translation_errors)));
   RecordProperty("median_rotation_error_deg", std::to_string(Median(rotation_errors)));

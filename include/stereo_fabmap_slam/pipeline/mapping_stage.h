@@ -6,6 +6,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -40,6 +42,40 @@ struct MappedKeyframe {
   double pose_graph_ms = 0;  // optimising edges that waited for this keyframe
 };
 
+// The mapping stage's inputs as a driver that runs it beside the other stages receives them (the
+// Backend nodelet), to be taken in order of arrival by MappingStage::Take.
+struct KeyframeInput {
+  map::Keyframe keyframe;
+  geometry::StereoCamera camera;  // the rig its features were measured with
+};
+struct LoopDetectionInput {  // the place stage's answer for a keyframe (PlaceResult)
+  std::int64_t keyframe_id = -1;
+  std::optional<map::LoopEdge> loop;
+};
+struct RelocalizationEdgeInput {
+  map::LoopEdge edge;
+};
+struct LoadedMapInput {  // a map the place stage loaded and checked
+  map::SavedMap saved;
+  std::string name;  // for the news: the file's path
+};
+struct LocalizationCorrectionInput {  // the tracking stage's map -> odom in localization mode
+  Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
+};
+using MappingInput = std::variant<KeyframeInput, LoopDetectionInput, RelocalizationEdgeInput,
+                                  LoadedMapInput, SlamMode, LocalizationCorrectionInput>;
+
+// What MappingStage::Take made of a batch of inputs.
+struct MappingBatchResult {
+  // One per keyframe input, with the input's index in the batch, in order.
+  std::vector<std::pair<std::size_t, MappedKeyframe>> keyframes;
+  bool map_changed = false;  // keyframes, edges or a map joined: the map is worth publishing
+  // For the driver's log: warnings (inputs refused, edges refused, falling behind, a first
+  // keyframe that is not the run's first) and news (optimisations, a map loaded).
+  std::vector<std::string> warnings;
+  std::vector<std::string> news;
+};
+
 // The mapping stage (the Backend nodelet; run in order by StereoSlam): every keyframe joins the
 // windowed bundle adjustment (odom frame), whose update goes back to the tracker, and, in
 // mapping mode, the pose graph (map frame); loop and relocalization edges join the graph, which
@@ -52,6 +88,14 @@ class MappingStage : public MapState {
 
   MappingStage(const backend::BundleAdjustmentOptions& bundle_adjustment,
                const backend::PoseGraphOptions& pose_graph, Clock clock);
+
+  // The inputs that waited while the stage worked, in order of arrival. Every keyframe joins the
+  // map, but only the newest of the batch's keyframes is followed by a bundle adjustment, whose
+  // window covers the others: a driver that fell behind the tracker catches up instead of
+  // falling further behind (adjusting each would cost a window's optimisation per keyframe).
+  // An input that cannot be taken (a keyframe of another camera, a map whose graph cannot be
+  // rebuilt) is skipped and said in the warnings; the others are taken.
+  MappingBatchResult Take(const std::vector<MappingInput>& batch);
 
   // A keyframe of the tracker, taken in order of id. `camera` is the rig its features were
   // measured with (the first keyframe's sets the bundle adjustment's; std::invalid_argument for
@@ -125,6 +169,9 @@ class MappingStage : public MapState {
   // (keyframes older than the newest that it does not have) are dropped. True if any joined.
   bool AddReadyEdges();
   double Optimise();
+  // One input of Take; true if the map changed.
+  bool TakeOne(const MappingInput& input, std::size_t index, bool optimise,
+               MappingBatchResult* result);
 
   backend::BundleAdjustmentOptions bundle_adjustment_options_;
   backend::PoseGraphOptions pose_graph_options_;

@@ -68,6 +68,21 @@ struct LoadedMap {
   std::int64_t next_point_id = 0;
 };
 
+class PlaceStage;
+
+// A question for loop detection from outside the pipeline (the detect_loop service): about a
+// keyframe of the map (`stored_id` >= 0), or about `keyframe`, which joins the map first if `add`.
+struct LoopQuery {
+  std::int64_t stored_id = -1;
+  map::Keyframe keyframe;
+  bool add = false;
+};
+
+// Why `stage` cannot answer `query` (empty: it can): a stored keyframe it does not hold, a
+// keyframe without place descriptors or image features, one to add that it holds already.
+// `stage` null: none is made yet (no keyframe, camera or map so far), so it holds nothing.
+std::string LoopQueryRefusal(const LoopQuery& query, const PlaceStage* stage);
+
 // The place stage (the LoopDetector nodelet; run in order by StereoSlam): the keyframe
 // database, FAB-MAP, loop detection with geometric verification, relocalization, and the map's
 // files. It keeps every keyframe the mapping stage took into its graph; where the map's pieces
@@ -94,9 +109,10 @@ class PlaceStage {
   void AddKeyframe(const map::Keyframe& keyframe, const MappedKeyframe& mapped);
   // Loop detection of a keyframe added before (std::out_of_range for another).
   PlaceResult DetectLoop(std::int64_t keyframe_id);
-  // Loop detection of a keyframe that is not added (the detect_loop service's query), or added
-  // first if `add` (then it is a place like the mapping stage's).
-  place_recognition::LoopDetection Detect(map::Keyframe keyframe, bool add);
+  // Loop detection as a LoopQuery asks it (a keyframe added first is a place like the mapping
+  // stage's). Throws std::invalid_argument with LoopQueryRefusal's reason for a query it cannot
+  // answer.
+  place_recognition::LoopDetection Answer(const LoopQuery& query);
 
   // Finds a frame in the map. Throws std::invalid_argument for place descriptors that do not fit
   // the vocabulary.
