@@ -22,6 +22,7 @@
 #include <ros/ros.h>
 
 #include "euroc_bag_fixture.h"
+#include "saved_maps.h"
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/camera/camera_options.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
@@ -182,45 +183,6 @@ double RmsDifference(const std::string& a_path, const std::string& b_path) {
   return a.empty() ? 0.0 : std::sqrt(sum / a.size());
 }
 
-// The two drivers' maps: the same keyframes, features, words and edges; poses and stereo points
-// to 1e-9 m (the graph's messages carry poses as quaternions, and its calibration file holds
-// the baseline to 15 digits: both change the last bits of a double, 1e-16 relative).
-void ExpectSameMaps(const map::SavedMap& a, const map::SavedMap& b) {
-  EXPECT_EQ(a.vocabulary_fingerprint, b.vocabulary_fingerprint);
-  EXPECT_EQ(a.camera.size, b.camera.size);
-  EXPECT_DOUBLE_EQ(a.camera.fx, b.camera.fx);
-  EXPECT_DOUBLE_EQ(a.camera.baseline, b.camera.baseline);
-  ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
-  for (std::size_t i = 0; i < a.keyframes.size(); ++i) {
-    const map::Keyframe& x = a.keyframes[i].keyframe;
-    const map::Keyframe& y = b.keyframes[i].keyframe;
-    ASSERT_EQ(x.id, y.id);
-    EXPECT_EQ(x.starts_new_segment, y.starts_new_segment) << x.id;
-    EXPECT_TRUE(x.T_world_camera.isApprox(y.T_world_camera, 1e-9)) << x.id;
-    EXPECT_TRUE(a.keyframes[i].T_map_camera.isApprox(b.keyframes[i].T_map_camera, 1e-9)) << x.id;
-    EXPECT_EQ(a.keyframes[i].words, b.keyframes[i].words) << x.id;
-    ASSERT_EQ(x.features.size(), y.features.size()) << x.id;
-    EXPECT_EQ(cv::norm(x.features.descriptors, y.features.descriptors, cv::NORM_L1), 0.0);
-    EXPECT_EQ(x.features.u_right, y.features.u_right);
-    for (std::size_t k = 0; k < x.features.size(); ++k) {
-      EXPECT_LT((x.features.points[k] - y.features.points[k]).norm(), 1e-9) << x.id << " " << k;
-    }
-    EXPECT_EQ(x.map_point_ids, y.map_point_ids);
-    for (std::size_t k = 0; k < x.features.size(); ++k) {
-      EXPECT_EQ(x.features.keypoints[k].pt, y.features.keypoints[k].pt);
-      EXPECT_EQ(x.features.keypoints[k].octave, y.features.keypoints[k].octave);
-    }
-  }
-  ASSERT_EQ(a.edges.size(), b.edges.size());
-  for (std::size_t i = 0; i < a.edges.size(); ++i) {
-    EXPECT_EQ(a.edges[i].edge.match_id, b.edges[i].edge.match_id);
-    EXPECT_EQ(a.edges[i].edge.query_id, b.edges[i].edge.query_id);
-    EXPECT_TRUE(a.edges[i].edge.T_match_query.isApprox(b.edges[i].edge.T_match_query, 1e-9));
-    EXPECT_TRUE(a.edges[i].edge.information.isApprox(b.edges[i].edge.information, 1e-12));
-    EXPECT_EQ(a.edges[i].relocalization, b.edges[i].relocalization);
-  }
-}
-
 // Both drivers on one sequence; with `cross_load`, each then localizes in the other's map.
 void CheckBothDrivers(const Sequence& sequence, const std::string& folder, bool expect_loops,
                       bool cross_load) {
@@ -253,7 +215,7 @@ void CheckBothDrivers(const Sequence& sequence, const std::string& folder, bool 
 
   const map::SavedMap offline_map = map::LoadMapFile(folder + "/offline.map");
   const map::SavedMap graph_map = map::LoadMapFile(folder + "/graph.map");
-  ExpectSameMaps(offline_map, graph_map);
+  ExpectSameMaps(offline_map, graph_map, 1e-9, 1e-9);
   if (!cross_load) return;
 
   // The graph's topics recorded, turned into the same files afterwards.

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "file_mutations.h"
+#include "saved_maps.h"
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
 #include "stereo_fabmap_slam/io/input_error.h"
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
@@ -74,48 +75,6 @@ TestMap MakeMap(std::uint64_t vocabulary_seed, int keyframes) {
   edge.information = geometry::DiagonalPoseInformation(0.02, 0.2);
   map.mapping.AddEdge(edge, backend::PoseGraphEdgeType::kRelocalization);
   return map;
-}
-
-// `pose_tolerance`: map poses pass through the pose graph's quaternions when a map is loaded into
-// a running one (1e-12 relative); through a file alone they come back bit for bit.
-void ExpectSameMaps(const map::SavedMap& a, const map::SavedMap& b, double pose_tolerance = 0.0) {
-  EXPECT_EQ(a.vocabulary_fingerprint, b.vocabulary_fingerprint);
-  EXPECT_EQ(a.camera.size, b.camera.size);
-  EXPECT_EQ(a.camera.fx, b.camera.fx);
-  EXPECT_EQ(a.camera.baseline, b.camera.baseline);
-  ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
-  for (std::size_t i = 0; i < a.keyframes.size(); ++i) {
-    const map::Keyframe& x = a.keyframes[i].keyframe;
-    const map::Keyframe& y = b.keyframes[i].keyframe;
-    EXPECT_EQ(x.id, y.id);
-    EXPECT_EQ(x.timestamp, y.timestamp);
-    EXPECT_EQ(x.starts_new_segment, y.starts_new_segment);
-    EXPECT_EQ(x.T_world_camera.matrix(), y.T_world_camera.matrix());
-    if (pose_tolerance == 0.0) {
-      EXPECT_EQ(a.keyframes[i].T_map_camera.matrix(), b.keyframes[i].T_map_camera.matrix());
-    } else {
-      EXPECT_TRUE(
-          a.keyframes[i].T_map_camera.isApprox(b.keyframes[i].T_map_camera, pose_tolerance));
-    }
-    ASSERT_EQ(x.features.size(), y.features.size());
-    EXPECT_EQ(cv::norm(x.features.descriptors, y.features.descriptors, cv::NORM_HAMMING), 0.0);
-    EXPECT_EQ(x.features.u_right, y.features.u_right);
-    EXPECT_EQ(x.features.points, y.features.points);
-    EXPECT_EQ(x.map_point_ids, y.map_point_ids);
-    for (std::size_t k = 0; k < x.features.size(); ++k) {
-      EXPECT_EQ(x.features.keypoints[k].pt, y.features.keypoints[k].pt);
-      EXPECT_EQ(x.features.keypoints[k].size, y.features.keypoints[k].size);
-    }
-    EXPECT_EQ(a.keyframes[i].words, b.keyframes[i].words);
-  }
-  ASSERT_EQ(a.edges.size(), b.edges.size());
-  for (std::size_t i = 0; i < a.edges.size(); ++i) {
-    EXPECT_EQ(a.edges[i].edge.match_id, b.edges[i].edge.match_id);
-    EXPECT_EQ(a.edges[i].edge.query_id, b.edges[i].edge.query_id);
-    EXPECT_EQ(a.edges[i].edge.T_match_query.matrix(), b.edges[i].edge.T_match_query.matrix());
-    EXPECT_EQ(a.edges[i].edge.information, b.edges[i].edge.information);
-    EXPECT_EQ(a.edges[i].relocalization, b.edges[i].relocalization);
-  }
 }
 
 std::vector<char> ReadBytes(const std::string& path) {
