@@ -102,8 +102,12 @@ SANITIZE_TESTS_LOG := $(REPO)/build/sanitizer-tests.log
 ROSTESTS := $(sort $(basename $(notdir $(wildcard test/ros/*.test))))
 ALONE_ROSTESTS := load
 rostest_targets = $(foreach t,$(1),run_tests_stereo_fabmap_slam_rostest_test_ros_$(t).test)
-test: build
-	$(CMAKE_BUILD) -j$(JOBS) tests
+# The default vocabulary (a render and a training, about a minute, mostly one core) is made
+# beside the test programs' build, which takes the other core.
+test: deps $(WS)/build/Makefile
+	$(CMAKE_BUILD) -j$(JOBS)
+	@$(MAKE) --no-print-directory $(FABMAP_DEFAULT)/detector_model.yaml & vocabulary=$$!; \
+	  $(CMAKE_BUILD) -j$(JOBS) tests || exit 1; wait $$vocabulary
 	rm -rf $(WS)/build/test_results
 	-$(CMAKE_BUILD) -j1 $(call rostest_targets,$(ALONE_ROSTESTS))
 	rm -f $(SANITIZE_LOG).status

@@ -69,15 +69,21 @@ run_one() {
   echo "sanitizers: $name exit $status"
 }
 export -f run_one
-# The slowest first, so that the run does not end on one of them alone: run_dataset_test (150 s
-# of the 240 s all take, two at a time) in three parts of about 75, 60 and 10 s, map_file_test
-# (30 s); then the rest by name.
-slowest="run_dataset_test map_file_test"
+# One case is left to the Release run: run_dataset_test's lower rates (72 s here, the longest)
+# track the same MH01 frames with the same code three more times, at other rates; under the
+# sanitizers the full-rate, quarter-rate and map cases run that code already.
+export GTEST_FILTER="-RunDataset.Mh01SeenAtLowerRatesKeepsTheKeyframesOfAFullRateRun"
+# The slowest first, so that the run does not end on one of them alone: run_dataset_test (110 s
+# of the 230 s all take, two at a time) in three parts of about 50, 45 and 15 s, fab_map_test and
+# map_file_test (35 s each); then the rest by name.
+slowest="run_dataset_test fab_map_test map_file_test"
 {
   if [ -x "$binaries/run_dataset_test" ]; then
     for shard in 0 1 2; do echo "$binaries/run_dataset_test $shard 3"; done
   fi
-  if [ -x "$binaries/map_file_test" ]; then echo "$binaries/map_file_test"; fi
+  for name in fab_map_test map_file_test; do
+    if [ -x "$binaries/$name" ]; then echo "$binaries/$name"; fi
+  done
   find "$binaries" -maxdepth 1 -name '*_test' -type f -executable | sort |
     { grep -v -x -F -f <(for name in $slowest; do echo "$binaries/$name"; done) || true; }
 } | xargs -P 2 -L 1 bash -c 'run_one "$1" "$results" $2 $3' _
