@@ -158,6 +158,9 @@ void BackendNodelet::Work() {
       }
     }
     const pipeline::MappingBatchResult result = stage_->Take(batch);
+    if (!result.falling_behind.empty()) {
+      NODELET_WARN_THROTTLE(5, "%s", result.falling_behind.c_str());
+    }
     for (const std::string& warning : result.warnings) NODELET_WARN("%s", warning.c_str());
     for (const std::string& news : result.news) NODELET_INFO("%s", news.c_str());
     ros::Time stamp;

@@ -55,8 +55,8 @@ MappingBatchResult MappingStage::Take(const std::vector<MappingInput>& batch) {
     keyframes += std::holds_alternative<KeyframeInput>(input) ? 1 : 0;
   }
   if (keyframes > 1) {
-    result.warnings.push_back("bundle adjustment falls behind: " + std::to_string(keyframes) +
-                              " keyframes added in one optimisation");
+    result.falling_behind = "bundle adjustment falls behind: " + std::to_string(keyframes) +
+                            " keyframes added in one optimisation";
   }
   const std::uint64_t optimisations = optimisations_;
   std::size_t seen = 0;

@@ -70,9 +70,12 @@ struct MappingBatchResult {
   // One per keyframe input, with the input's index in the batch, in order.
   std::vector<std::pair<std::size_t, MappedKeyframe>> keyframes;
   bool map_changed = false;  // keyframes, edges or a map joined: the map is worth publishing
-  // For the driver's log: warnings (inputs refused, edges refused, falling behind, a first
-  // keyframe that is not the run's first) and news (optimisations, a map loaded).
+  // For the driver's log: warnings (inputs refused, edges refused, a first keyframe that is not
+  // the run's first) and news (optimisations, a map loaded).
   std::vector<std::string> warnings;
+  // Said when several keyframes waited (empty otherwise): under load it comes with every batch,
+  // so a driver may say it at a limited rate.
+  std::string falling_behind;
   std::vector<std::string> news;
 };
 
