@@ -8,7 +8,6 @@
 #include <optional>
 #include <thread>
 
-#include <cv_bridge/cv_bridge.h>
 #include <nodelet/nodelet.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
@@ -38,7 +37,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
  private:
   void onInit() override;
   void Subscribe(ros::NodeHandle& node);
-  void StartStage(const ros_input::MountedRig& rig);  // once; call with mutex_
+  void Calibrate(const ros_input::MountedRig& rig);  // once; call with mutex_
   void Work();
   void ProcessPair(const ros_wiring::ImagePair& pair);
   // Asks the LoopDetector (relocalize_frame) and hands the answer to the stage. Call with mutex_.
@@ -55,16 +54,14 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   ros_wiring::TrackingNews news_;  // worker only
   std::unique_ptr<ros_wiring::TrackerOutputs> outputs_;
   std::mutex mutex_;  // the stage: the worker, the update, mode and map callbacks share it
-  std::unique_ptr<pipeline::TrackingStage> stage_;
-  pipeline::SlamMode mode_ = pipeline::SlamMode::kMapping;  // for a stage made later
-  std::optional<pipeline::LoadedMap> loaded_map_;           // a map loaded before the stage
+  std::unique_ptr<pipeline::TrackingStage> stage_;  // calibrated at start or by camera_info
   ros_wiring::PairQueue pairs_;
   ros_wiring::MappingProgress mapping_;     // map_graph, updates: the snapshot and lockstep's cue
   std::uint64_t relocalization_edges_ = 0;  // edges its relocalizations added (worker only)
   std::thread worker_;
   std::unique_ptr<ros_input::StereoImageInput> input_;
   ros::Subscriber update_subscriber_, graph_subscriber_, mode_subscriber_, loaded_subscriber_;
-  ros::ServiceClient relocalize_frame_client_;
+  std::optional<ros_wiring::RelocalizeFrameClient> relocalize_frame_;  // with loop closing
   std::unique_ptr<ros_wiring::RelocalizeService> relocalize_service_;
 };
 
@@ -78,13 +75,16 @@ void StereoTrackerNodelet::onInit() {
   }
   const ros_wiring::TrackerParameters& p = parameters_;
   NODELET_INFO_STREAM("options in force:\n" << p.printed);
-  pairs_.Configure(p.options.tracker.queued_pairs, p.options.tracker.catch_up_gap);
+  stage_ = std::make_unique<pipeline::TrackingStage>(
+      p.options, p.monitor, p.relocalizer.attempt_every_n_frames, ros_wiring::SteadyMilliseconds);
+  pairs_.Configure(p.options.tracker.queued_pairs, p.options.tracker.catch_up_gap,
+                   &stage_->input());
   outputs_ = std::make_unique<ros_wiring::TrackerOutputs>(node, p.frames, p.publish_tf);
   Subscribe(node);
   if (!p.use_camera_info) {
     std::lock_guard<std::mutex> lock(mutex_);
     try {
-      StartStage(
+      Calibrate(
           ros_input::RigFromCalibrationFile(p.calibration_file, p.rectification, p.base_to_camera));
     } catch (const std::exception& error) {
       NODELET_FATAL_STREAM("calibration: " << error.what());
@@ -97,8 +97,8 @@ void StereoTrackerNodelet::onInit() {
         for (const pipeline::InputEvent& event : pairs_.Push(left, right)) Log(event);
       },
       [this](int side) {
-        if (pipeline::InputMonitor* monitor = pairs_.monitor()) {  // none before calibration
-          for (const auto& event : monitor->OnImage(side, ros_wiring::WallSeconds())) Log(event);
+        for (const auto& event : stage_->input().OnImage(side, ros_wiring::WallSeconds())) {
+          Log(event);
         }
       });
   if (p.use_camera_info) {
@@ -110,9 +110,9 @@ void StereoTrackerNodelet::onInit() {
     }
     input_->SubscribeCameraInfo(node, p.queue_size, [this](const auto& left, const auto& right) {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (stage_) return;  // the first pair defines the rectification
+      if (stage_->calibrated()) return;  // the first pair defines the rectification
       try {
-        StartStage(ros_input::RigFromCameraInfo(*left, *right, parameters_.base_to_camera));
+        Calibrate(ros_input::RigFromCameraInfo(*left, *right, parameters_.base_to_camera));
       } catch (const std::exception& error) {
         NODELET_WARN_THROTTLE(5, "camera_info pair unusable: %s", error.what());
       }
@@ -128,7 +128,7 @@ void StereoTrackerNodelet::Subscribe(ros::NodeHandle& node) {
         const pipeline::MappedKeyframe mapped = ros_conversions::FromMappedKeyframeMessage(*m);
         {
           std::lock_guard<std::mutex> lock(mutex_);
-          if (stage_) stage_->ApplyUpdate(mapped.update);
+          stage_->ApplyUpdate(mapped.update);
         }
         mapping_.OnUpdate(mapped.keyframe_id);
       });
@@ -140,8 +140,7 @@ void StereoTrackerNodelet::Subscribe(ros::NodeHandle& node) {
       node.subscribe<std_msgs::String>("mode", 1, [this](const std_msgs::StringConstPtr& m) {
         const std::optional<pipeline::SlamMode> mode = pipeline::ParseSlamMode(m->data);
         std::lock_guard<std::mutex> lock(mutex_);
-        if (mode) mode_ = *mode;
-        if (mode && stage_) stage_->SetMode(*mode, !mapping_.Snapshot()->empty());
+        if (mode) stage_->SetMode(*mode, !mapping_.Snapshot()->empty());
       });
   loaded_subscriber_ = node.subscribe<stereo_fabmap_slam::MapLoaded>(
       "map_loaded", 1, [this](const stereo_fabmap_slam::MapLoadedConstPtr& m) {
@@ -149,36 +148,27 @@ void StereoTrackerNodelet::Subscribe(ros::NodeHandle& node) {
                                          static_cast<std::int64_t>(m->next_keyframe_id),
                                          static_cast<std::int64_t>(m->next_point_id)};
         std::lock_guard<std::mutex> lock(mutex_);
-        if (stage_) stage_->OnMapLoaded(loaded);
-        loaded_map_ = loaded;
+        stage_->OnMapLoaded(loaded);
       });
-  relocalize_frame_client_ =
-      node.serviceClient<stereo_fabmap_slam::RelocalizeFrame>("relocalize_frame", true);
+  relocalize_frame_.emplace(node, parameters_.frames.odom);
   relocalize_service_ = std::make_unique<ros_wiring::RelocalizeService>(
       node, *outputs_,
       ros_wiring::RelocalizeService::Hooks{[this] { return mapping_.Snapshot()->empty(); },
                                            [this](bool reanchor) {
                                              std::lock_guard<std::mutex> lock(mutex_);
-                                             if (stage_) stage_->RequestRelocalization(reanchor);
+                                             stage_->RequestRelocalization(reanchor);
                                            },
                                            [this] {
                                              std::lock_guard<std::mutex> lock(mutex_);
-                                             if (stage_) stage_->CancelRelocalizationRequest();
+                                             stage_->CancelRelocalizationRequest();
                                            }});
 }
 
-void StereoTrackerNodelet::StartStage(const ros_input::MountedRig& rig) {
-  const ros_wiring::TrackerParameters& p = parameters_;
-  stage_ = std::make_unique<pipeline::TrackingStage>(p.options, rig.rectifier, p.monitor,
-                                                     p.relocalizer.attempt_every_n_frames,
-                                                     ros_wiring::SteadyMilliseconds);
+void StereoTrackerNodelet::Calibrate(const ros_input::MountedRig& rig) {
   // odom is the base at the first frame (REP-105): the camera starts at its mounting, and every
   // pose the stages exchange is in odom.
-  stage_->SetStartPose(rig.T_base_camera);
-  stage_->SetMode(mode_, !mapping_.Snapshot()->empty());
-  if (loaded_map_) stage_->OnMapLoaded(*loaded_map_);
+  stage_->Calibrate(rig.rectifier, rig.T_base_camera);
   outputs_->SetMounting(rig.T_base_camera);
-  pairs_.SetMonitor(&stage_->input());
   NODELET_INFO("stereo camera: baseline %.3f m, %dx%d", stage_->camera().baseline,
                stage_->camera().size.width, stage_->camera().size.height);
 }
@@ -200,24 +190,13 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
   const ros::Time stamp = pair.left->header.stamp;
   const double seconds = ros_conversions::ToSeconds(stamp);
   std::unique_lock<std::mutex> lock(mutex_);
-  if (!stage_) {
-    NODELET_WARN_THROTTLE(5, "no calibration yet (waiting for camera_info); frame skipped");
-    return;
-  }
   pipeline::TrackingOutput output;
   std::string refusal;
   try {
-    // Messages that cannot be images are refused before any pixel is read; colour becomes
-    // mono8, encodings cv_bridge cannot convert throw.
-    refusal = ros_wiring::ImageRefusal(*pair.left, *pair.right);
-    if (refusal.empty()) {
-      output = stage_->Process({seconds, cv_bridge::toCvShare(pair.left, "mono8")->image,
-                                cv_bridge::toCvShare(pair.right, "mono8")->image, pair.arrival},
-                               mapping_.Snapshot().get());
+    if (const std::optional<pipeline::StereoPair> stereo =
+            ros_wiring::StereoPairOf(pair, &refusal)) {
+      output = stage_->Process(*stereo, mapping_.Snapshot().get());
     }
-  } catch (const cv_bridge::Exception& error) {
-    refusal = "unsupported image encoding (" + pair.left->encoding + " / " + pair.right->encoding +
-              "): " + error.what();
   } catch (const std::exception& error) {
     refusal = std::string("frame skipped: ") + error.what();
   }
@@ -259,30 +238,19 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
 void StereoTrackerNodelet::Relocalize(const ros::Time& stamp,
                                       const pipeline::RelocalizationRequest& request,
                                       pipeline::FrameRecord* record) {
-  stereo_fabmap_slam::RelocalizeFrame call;
-  call.request =
-      ros_conversions::ToRelocalizeFrameRequest(request, stage_->camera(), parameters_.frames.odom);
-  call.request.frame.header.stamp = stamp;
-  if (!relocalize_frame_client_.isValid()) {
-    relocalize_frame_client_ = getNodeHandle().serviceClient<stereo_fabmap_slam::RelocalizeFrame>(
-        "relocalize_frame", true);
-  }
-  if (!relocalize_frame_client_.call(call)) {
-    pipeline::UserRelocalization unavailable;
-    unavailable.message = "the LoopDetector's relocalize_frame service is not available";
-    if (request.from_user) AnswerUser(unavailable);
-    NODELET_WARN_THROTTLE(5, "relocalization: %s", unavailable.message.c_str());
+  const std::optional<pipeline::RelocalizationAnswer> found =
+      relocalize_frame_ ? relocalize_frame_->Call(request, stage_->camera(), stamp) : std::nullopt;
+  if (!found) {
+    const std::string reason = "the LoopDetector's relocalize_frame service is not available";
+    NODELET_WARN_THROTTLE(5, "relocalization: %s", reason.c_str());
+    const pipeline::RelocalizationOutcome outcome = stage_->OnNoRelocalization(request, reason);
+    if (outcome.user) AnswerUser(*outcome.user);
     return;
   }
-  const pipeline::RelocalizationAnswer answer =
-      ros_conversions::FromRelocalizeFrameResponse(call.response);
+  const pipeline::RelocalizationAnswer& answer = *found;
   relocalization_edges_ += answer.edge ? 1 : 0;
   const pipeline::RelocalizationOutcome outcome = stage_->OnRelocalization(request, answer);
-  if (!answer.already_joined) {
-    record->timing.relocalization_ms = answer.ms;
-    record->relocalization = pipeline::DescribeRelocalization(answer.result);
-    record->relocalized = answer.result.success();
-  }
+  pipeline::RecordRelocalization(answer, record);
   if (!outcome.news.empty()) NODELET_INFO("%s", outcome.news.c_str());
   if (outcome.T_map_odom) outputs_->PublishCorrection(stamp, *outcome.T_map_odom);
   if (outcome.user) AnswerUser(*outcome.user);

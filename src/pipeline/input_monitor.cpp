@@ -27,7 +27,7 @@ std::string Format(const char* format, double a, double b = 0) {
 
 }  // namespace
 
-InputMonitor::InputMonitor(const InputMonitorOptions& options, const cv::Size& image_size)
+InputMonitor::InputMonitor(const InputMonitorOptions& options, std::optional<cv::Size> image_size)
     : options_(options), image_size_(image_size) {
   if (!(options.dropout_seconds > 0) || !(options.skip_report_period > 0) ||
       options.unpaired_limit < 1) {
@@ -35,18 +35,31 @@ InputMonitor::InputMonitor(const InputMonitorOptions& options, const cv::Size& i
   }
 }
 
+void InputMonitor::SetImageSize(const cv::Size& image_size) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  image_size_ = image_size;
+}
+
 InputMonitor::Verdict InputMonitor::CheckPair(double stamp, const cv::Mat& left,
                                               const cv::Mat& right, std::uint64_t arrival) {
   std::lock_guard<std::mutex> lock(mutex_);
   Verdict verdict;
-  if (left.size() != image_size_ || right.size() != image_size_) {
+  if (!image_size_) {
+    verdict.track = false;
+    ++counts_.refused;
+    verdict.events.push_back({InputEvent::Kind::kUncalibrated,
+                              "no calibration yet (waiting for camera_info); frame skipped", true,
+                              true});
+    return verdict;
+  }
+  if (left.size() != *image_size_ || right.size() != *image_size_) {
     verdict.track = false;
     ++counts_.refused;
     char text[160];
     std::snprintf(text, sizeof(text),
                   "image size %dx%d / %dx%d differs from the calibration's %dx%d; frame skipped",
-                  left.cols, left.rows, right.cols, right.rows, image_size_.width,
-                  image_size_.height);
+                  left.cols, left.rows, right.cols, right.rows, image_size_->width,
+                  image_size_->height);
     verdict.events.push_back({InputEvent::Kind::kWrongSize, text, true, true});
     return verdict;
   }

@@ -140,6 +140,13 @@ UserRelocalization RelocalizationPolicy::FailUserRequest(const std::string& fail
   return user;
 }
 
+RelocalizationOutcome RelocalizationPolicy::OnNoAnswer(const RelocalizationRequest& request,
+                                                       const std::string& reason) {
+  RelocalizationOutcome outcome;
+  if (request.from_user) outcome.user = FailUserRequest(reason);
+  return outcome;
+}
+
 bool RelocalizationPolicy::on_map() const {
   if (mode_ == SlamMode::kLocalization) return localized_ && has_pose_;
   return reference_keyframe_ >= 0 && !recovering_;

@@ -75,6 +75,13 @@ std::string DescribeRelocalization(const relocalization::Relocalization& r) {
          ": " + r.reason;
 }
 
+void RecordRelocalization(const RelocalizationAnswer& answer, FrameRecord* record) {
+  if (answer.already_joined) return;
+  record->timing.relocalization_ms = answer.ms;
+  record->relocalization = DescribeRelocalization(answer.result);
+  record->relocalized = answer.result.success();
+}
+
 void JsonObject::Add(const std::string& key, double value, int decimals) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.*f", decimals, value);

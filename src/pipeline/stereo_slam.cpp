@@ -76,11 +76,7 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
       const RelocalizationOutcome outcome =
           tracking_.OnRelocalization(*output.relocalization, answer);
       if (outcome.T_map_odom) mapping_.SetLocalizationCorrection(*outcome.T_map_odom);
-      if (!answer.already_joined) {
-        record.timing.relocalization_ms = answer.ms;
-        record.relocalization = DescribeRelocalization(answer.result);
-        record.relocalized = answer.result.success();
-      }
+      RecordRelocalization(answer, &record);
     }
     record.on_map = tracking_.on_map();
     record.T_map_camera = tracking_.T_map_camera();

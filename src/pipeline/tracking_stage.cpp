@@ -1,16 +1,39 @@
 #include "stereo_fabmap_slam/pipeline/tracking_stage.h"
 
+#include <stdexcept>
+
 namespace stereo_fabmap_slam::pipeline {
 
 TrackingStage::TrackingStage(const FrontEndOptions& options,
                              const camera::StereoRectifier& rectifier,
                              const InputMonitorOptions& input, int attempt_every_n_frames,
                              Clock clock)
-    : front_end_(options, rectifier, clock),
-      input_(input, rectifier.camera().size),
-      policy_(attempt_every_n_frames),
-      clock_(std::move(clock)),
-      places_(options.place_features.has_value()) {}
+    : TrackingStage(options, input, attempt_every_n_frames, std::move(clock)) {
+  Calibrate(rectifier);
+}
+
+TrackingStage::TrackingStage(const FrontEndOptions& options, const InputMonitorOptions& input,
+                             int attempt_every_n_frames, Clock clock)
+    : options_(options), input_(input), policy_(attempt_every_n_frames), clock_(std::move(clock)) {}
+
+void TrackingStage::Calibrate(const camera::StereoRectifier& rectifier,
+                              const Eigen::Isometry3d& T_odom_camera) {
+  if (front_end_) throw std::logic_error("TrackingStage::Calibrate: calibrated already");
+  front_end_.emplace(options_, rectifier, clock_);
+  front_end_->SetStartPose(T_odom_camera);
+  front_end_->SkipIdsBelow(first_keyframe_id_, first_point_id_);
+  input_.SetImageSize(rectifier.camera().size);
+}
+
+const StereoFrontEnd& TrackingStage::front_end() const {
+  if (!front_end_) throw std::logic_error("TrackingStage: no calibration yet");
+  return *front_end_;
+}
+
+void TrackingStage::ApplyUpdate(const map::KeyframeUpdate& update) {
+  // Before Calibrate the front end made no keyframe: an update is of another run's.
+  if (front_end_) front_end_->ApplyUpdate(update);
+}
 
 TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* map) {
   TrackingOutput output;
@@ -19,15 +42,16 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   output.events = std::move(verdict.events);
   if (!verdict.track) return output;
   if (verdict.reset) {
-    front_end_.Reset();
+    front_end_->Reset();
     policy_.OnReset();
   }
+  // The monitor refuses every pair until Calibrate gave it the image size.
   FrontEndOutput tracked =
-      front_end_.Process(pair.timestamp, pair.left, pair.right, verdict.frames_skipped);
+      front_end_->Process(pair.timestamp, pair.left, pair.right, verdict.frames_skipped);
   output.tracked = true;
   output.timing = tracked.timing;
   output.tracking = std::move(tracked.tracking);
-  if (!places_ || map == nullptr) return output;
+  if (!places() || map == nullptr) return output;
 
   const odometry::TrackingResult& result = output.tracking;
   const RelocalizationPolicy::Decision decision = policy_.Decide(result, !map->empty());
@@ -39,7 +63,7 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   RelocalizationRequest request;
   const double start = clock_();
   request.place_descriptors =
-      result.keyframe ? result.keyframe->place_descriptors : front_end_.DescribeLastFrame();
+      result.keyframe ? result.keyframe->place_descriptors : front_end_->DescribeLastFrame();
   request.describe_ms = clock_() - start;
   request.timestamp = pair.timestamp;
   request.features = std::move(tracked.features);
@@ -55,8 +79,12 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
 
 void TrackingStage::OnMapLoaded(const LoadedMap& loaded) {
   // This run's keyframes so far may share the map's ids: a new local map, numbered above it.
-  front_end_.StartNewLocalMap();
-  front_end_.SkipIdsBelow(loaded.next_keyframe_id, loaded.next_point_id);
+  first_keyframe_id_ = loaded.next_keyframe_id;
+  first_point_id_ = loaded.next_point_id;
+  if (front_end_) {
+    front_end_->StartNewLocalMap();
+    front_end_->SkipIdsBelow(loaded.next_keyframe_id, loaded.next_point_id);
+  }
   policy_.OnMapLoaded();
 }
 

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <cv_bridge/cv_bridge.h>
 #include <ros/console.h>
+#include <stereo_fabmap_slam/RelocalizeFrame.h>
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
@@ -81,6 +83,36 @@ std::string ImageRefusal(const sensor_msgs::Image& left, const sensor_msgs::Imag
   return "";
 }
 
+std::optional<pipeline::StereoPair> StereoPairOf(const ImagePair& pair, std::string* refusal) {
+  *refusal = ImageRefusal(*pair.left, *pair.right);
+  if (!refusal->empty()) return std::nullopt;
+  try {
+    return pipeline::StereoPair{ros_conversions::ToSeconds(pair.left->header.stamp),
+                                cv_bridge::toCvShare(pair.left, "mono8")->image,
+                                cv_bridge::toCvShare(pair.right, "mono8")->image, pair.arrival};
+  } catch (const cv_bridge::Exception& error) {
+    *refusal = "unsupported image encoding (" + pair.left->encoding + " / " + pair.right->encoding +
+               "): " + error.what();
+    return std::nullopt;
+  }
+}
+
+RelocalizeFrameClient::RelocalizeFrameClient(const ros::NodeHandle& node, std::string odom_frame)
+    : node_(node), odom_frame_(std::move(odom_frame)) {}
+
+std::optional<pipeline::RelocalizationAnswer> RelocalizeFrameClient::Call(
+    const pipeline::RelocalizationRequest& request, const geometry::StereoCamera& camera,
+    const ros::Time& stamp) {
+  stereo_fabmap_slam::RelocalizeFrame call;
+  call.request = ros_conversions::ToRelocalizeFrameRequest(request, camera, odom_frame_);
+  call.request.frame.header.stamp = stamp;
+  if (!client_.isValid()) {
+    client_ = node_.serviceClient<stereo_fabmap_slam::RelocalizeFrame>("relocalize_frame", true);
+  }
+  if (!client_.call(call)) return std::nullopt;
+  return ros_conversions::FromRelocalizeFrameResponse(call.response);
+}
+
 void EventLog::Log(const pipeline::InputEvent& event) {
   if (event.repeats) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -113,19 +145,11 @@ void TrackingNews::Report(const odometry::TrackingResult& result, EventLog* log)
   }
 }
 
-void PairQueue::Configure(std::size_t capacity, double catch_up_gap) {
+void PairQueue::Configure(std::size_t capacity, double catch_up_gap,
+                          pipeline::InputMonitor* monitor) {
   std::lock_guard<std::mutex> lock(mutex_);
   queue_.emplace(capacity, catch_up_gap);
-}
-
-void PairQueue::SetMonitor(pipeline::InputMonitor* monitor) {
-  std::lock_guard<std::mutex> lock(mutex_);
   monitor_ = monitor;
-}
-
-pipeline::InputMonitor* PairQueue::monitor() {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return monitor_;
 }
 
 std::vector<pipeline::InputEvent> PairQueue::Push(const sensor_msgs::ImageConstPtr& left,
@@ -134,16 +158,13 @@ std::vector<pipeline::InputEvent> PairQueue::Push(const sensor_msgs::ImageConstP
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const std::uint64_t arrival = ++arrivals_;
-    if (monitor_ != nullptr) events = monitor_->OnPair(WallSeconds());
+    events = monitor_->OnPair(WallSeconds());
     // A full queue drops the newest pair: what waits stays a contiguous stretch of the stream.
-    if (!queue_->Push(left->header.stamp.toSec(), ImagePair{left, right, arrival}) &&
-        monitor_ != nullptr) {
+    if (!queue_->Push(left->header.stamp.toSec(), ImagePair{left, right, arrival})) {
       monitor_->CountSkipped(1);
     }
-    if (monitor_ != nullptr) {
-      if (auto report = monitor_->SkipReport(WallSeconds(), last_frame_ms_)) {
-        events.push_back(*report);
-      }
+    if (auto report = monitor_->SkipReport(WallSeconds(), last_frame_ms_)) {
+      events.push_back(*report);
     }
   }
   ready_.notify_one();
@@ -155,7 +176,7 @@ std::optional<ImagePair> PairQueue::Take(std::vector<pipeline::InputEvent>* even
   while (!stopping_ && queue_->empty()) {
     // Idle with skips not yet reported (the stream ended or paused): report them when their
     // second is up rather than never.
-    if (monitor_ == nullptr || !monitor_->HasUnreportedSkips()) {
+    if (!monitor_->HasUnreportedSkips()) {
       ready_.wait(lock);
       continue;
     }
@@ -167,7 +188,7 @@ std::optional<ImagePair> PairQueue::Take(std::vector<pipeline::InputEvent>* even
   }
   if (stopping_) return std::nullopt;
   odometry::FrameQueue<ImagePair>::Taken taken = queue_->Take();
-  if (monitor_ != nullptr) monitor_->CountSkipped(taken.skipped);
+  monitor_->CountSkipped(taken.skipped);
   return std::move(taken.frame);
 }
 

@@ -18,16 +18,19 @@
 #include <vector>
 
 #include <ros/node_handle.h>
+#include <ros/service_client.h>
 #include <sensor_msgs/Image.h>
 #include <stereo_fabmap_slam/MapGraph.h>
 #include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/camera/camera_options.h"
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/odometry/frame_queue.h"
 #include "stereo_fabmap_slam/pipeline/input_monitor.h"
 #include "stereo_fabmap_slam/pipeline/map_state.h"
 #include "stereo_fabmap_slam/pipeline/relocalization_policy.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
+#include "stereo_fabmap_slam/pipeline/tracking_stage.h"
 #include "stereo_fabmap_slam/relocalization/relocalization_options.h"
 #include "tracker_outputs.h"
 
@@ -92,6 +95,28 @@ struct ImagePair {
   std::uint64_t arrival = 0;  // its place in the stream of pairs (1, 2, ...)
 };
 
+// The pair as the tracking stage takes it: mono8 images (colour converted, shared where they are
+// mono8 already). nullopt with `refusal` saying why for messages that are no images (checked
+// before any pixel is read: ImageRefusal) or encodings cv_bridge cannot convert.
+std::optional<pipeline::StereoPair> StereoPairOf(const ImagePair& pair, std::string* refusal);
+
+// The StereoTracker's calls of the LoopDetector's relocalize_frame: a persistent connection,
+// made again after the LoopDetector restarted.
+class RelocalizeFrameClient {
+ public:
+  RelocalizeFrameClient(const ros::NodeHandle& node, std::string odom_frame);
+  // The place stage's answer to `request` about the frame at `stamp`; nullopt when no
+  // LoopDetector answers.
+  std::optional<pipeline::RelocalizationAnswer> Call(const pipeline::RelocalizationRequest& request,
+                                                     const geometry::StereoCamera& camera,
+                                                     const ros::Time& stamp);
+
+ private:
+  ros::NodeHandle node_;
+  std::string odom_frame_;
+  ros::ServiceClient client_;
+};
+
 // Between the synchroniser and the tracking thread: a bounded odometry::FrameQueue, so that a
 // tracker slower than the camera skips whole pairs instead of falling behind and the subscribers'
 // queues never overflow (which would drop a left image without its right). Pairs dropped from a
@@ -99,10 +124,8 @@ struct ImagePair {
 // second, also while the stream pauses.
 class PairQueue {
  public:
-  void Configure(std::size_t capacity, double catch_up_gap);
-  // The monitor of the tracking stage, once it exists; pairs before it are queued uncounted.
-  void SetMonitor(pipeline::InputMonitor* monitor);
-  pipeline::InputMonitor* monitor();
+  // `monitor`: the tracking stage's, which counts every pair (it outlives the queue's use).
+  void Configure(std::size_t capacity, double catch_up_gap, pipeline::InputMonitor* monitor);
   // From the synchroniser. Returns the monitor's events (a dropout's end, skip reports).
   std::vector<pipeline::InputEvent> Push(const sensor_msgs::ImageConstPtr& left,
                                          const sensor_msgs::ImageConstPtr& right);

@@ -221,5 +221,33 @@ TEST(RelocalizationPolicy, TheUsersRequestIsAnsweredByTheNextFrame) {
   EXPECT_FALSE(policy.user_request_pending());
 }
 
+TEST(RelocalizationPolicy, ARequestNoPlaceStageAnsweredIsAnsweredOnceAndTheRecoveryGoesOn) {
+  RelocalizationPolicy policy(2);
+  policy.Decide(Tracked(0, true), true);
+  policy.Decide(Tracked(3, false, /*new_segment=*/true), true);  // a loss: recovering
+  ASSERT_TRUE(policy.recovering());
+  policy.RequestFromUser(false);
+  const odometry::TrackingResult frame = Tracked(3);
+  const RelocalizationPolicy::Decision decision = policy.Decide(frame, true);
+  ASSERT_TRUE(decision.ask);
+  ASSERT_TRUE(decision.from_user);
+  const pipeline::RelocalizationOutcome outcome =
+      policy.OnNoAnswer(RequestOf(decision, frame), "the place stage is not running");
+  ASSERT_TRUE(outcome.user.has_value());
+  EXPECT_FALSE(outcome.user->success);
+  EXPECT_EQ(outcome.user->message, "the place stage is not running");
+  EXPECT_FALSE(outcome.T_map_odom.has_value());
+  EXPECT_FALSE(policy.user_request_pending()) << "answered: the next frame is no user's";
+  EXPECT_TRUE(policy.recovering()) << "nothing was found: the recovery goes on";
+  // Every 2nd frame with a pose (the loss's keyframe was the first): the recovery's next
+  // attempt, which no user asked for.
+  const RelocalizationPolicy::Decision next = policy.Decide(frame, true);
+  EXPECT_TRUE(next.ask);
+  EXPECT_FALSE(next.from_user);
+  EXPECT_FALSE(policy.OnNoAnswer(RequestOf(next, frame), "again").user.has_value())
+      << "the recovery's own attempt has no user to answer";
+  EXPECT_TRUE(policy.recovering());
+}
+
 }  // namespace
 }  // namespace stereo_fabmap_slam::test

@@ -176,6 +176,50 @@ TEST_F(TrackingStageTest, PairsPassedOverTellTheTrackerHowFarApartItsFramesAre) 
   EXPECT_EQ(verdict.frames_skipped, 3);
 }
 
+// A driver that reads the calibration from camera_info makes the stage before it knows the
+// camera: every pair until then is refused and counted, and what the other stages announced
+// meanwhile (a mode, a loaded map) holds once it is calibrated.
+TEST_F(TrackingStageTest, AStageCalibratedLaterCountsThePairsBeforeAndKeepsWhatItWasTold) {
+  pipeline::FrontEndOptions options;
+  options.tracker.parallel = false;
+  options.place_features = options.features;
+  pipeline::TrackingStage stage(options, pipeline::InputMonitorOptions(), 1, [] { return 0.0; });
+  EXPECT_FALSE(stage.calibrated());
+  EXPECT_THROW(stage.camera(), std::logic_error);
+  const datasets::StereoImages images = sequence_.LoadStereoPair(0);
+  for (std::uint64_t arrival = 1; arrival <= 3; ++arrival) {
+    const pipeline::TrackingOutput refused =
+        stage.Process({stamp_ + arrival * kStep, images.left, images.right, arrival}, &map_);
+    EXPECT_FALSE(refused.tracked);
+    EXPECT_TRUE(HasEvent(refused.events, InputEvent::Kind::kUncalibrated, "no calibration yet"));
+  }
+  EXPECT_EQ(stage.input().counts().refused, 3u);
+  // Told before its camera is known: localization mode, and a map numbered up to 40 / 5000.
+  stage.SetMode(pipeline::SlamMode::kLocalization, false);
+  stage.OnMapLoaded({12, 40, 5000});
+  const Eigen::Isometry3d mounting(Eigen::Translation3d(0.1, 0.0, 0.3));
+  stage.Calibrate(rectifier_, mounting);
+  EXPECT_THROW(stage.Calibrate(rectifier_), std::logic_error);
+  EXPECT_EQ(stage.camera().size, cv::Size(752, 480));
+  EXPECT_EQ(stage.policy().mode(), pipeline::SlamMode::kLocalization);
+  const pipeline::TrackingOutput first =
+      stage.Process({stamp_ + 4 * kStep, images.left, images.right, 4}, &map_);
+  ASSERT_TRUE(first.tracked);
+  ASSERT_TRUE(first.tracking.keyframe.has_value());
+  EXPECT_EQ(first.tracking.keyframe->id, 40) << "numbered above the loaded map's keyframes";
+  int points = 0;
+  for (const std::int64_t id : first.tracking.keyframe->map_point_ids) {
+    if (id < 0) continue;
+    EXPECT_GE(id, 5000);
+    ++points;
+  }
+  EXPECT_GT(points, 50) << "the first keyframe's stereo points";
+  EXPECT_TRUE(first.tracking.T_world_camera.isApprox(mounting, 1e-9))
+      << "the first frame is at the mounting given with the calibration";
+  EXPECT_EQ(stage.input().counts().tracked, 1u);
+  EXPECT_EQ(stage.input().counts().refused, 3u);
+}
+
 // The image callbacks' side of the monitor, with the wall times a driver gives it.
 TEST(InputMonitor, ACameraThatDropsOutIsNamedOnlyWhileTheOtherStreams) {
   pipeline::InputMonitor monitor(pipeline::InputMonitorOptions(), cv::Size(752, 480));

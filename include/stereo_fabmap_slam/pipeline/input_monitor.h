@@ -17,6 +17,7 @@ struct InputEvent {
     kTrackingLost,    // a frame not tracked (the drivers say it)
     kTrackingFound,   // tracking found its map again after lost frames (the drivers say it)
     kUnreadable,      // a message the driver could not make an image of: refused (CountRefused)
+    kUncalibrated,    // a pair before the camera's calibration is known: refused
     kWrongSize,       // a pair of another size than the calibration's: refused
     kFrozen,          // the same image again under a new stamp: refused
     kUnfrozen,        // the images change again
@@ -31,7 +32,7 @@ struct InputEvent {
   std::string message;
   bool warning = true;  // false: good news (kUnfrozen, kPairsAgain)
   // A message that repeats while the condition lasts: log it throttled (kFrozen,
-  // kUnsynchronised, kDropout, kWrongSize).
+  // kUnsynchronised, kDropout, kWrongSize, kUncalibrated).
   bool repeats = false;
 };
 
@@ -51,7 +52,7 @@ struct InputMonitorOptions {
 struct InputCounts {
   std::uint64_t received = 0;  // stereo pairs the driver was given
   std::uint64_t tracked = 0;   // handed to the tracker
-  std::uint64_t refused = 0;   // bad input: wrong size, frozen
+  std::uint64_t refused = 0;   // bad input (wrong size, frozen) or before the calibration
   std::uint64_t skipped = 0;   // passed over for lack of time (CountSkipped)
 };
 
@@ -63,7 +64,12 @@ struct InputCounts {
 // tracking thread call it at once.
 class InputMonitor {
  public:
-  InputMonitor(const InputMonitorOptions& options, const cv::Size& image_size);
+  // Without `image_size` (a driver whose calibration comes with the images, as camera_info),
+  // every pair is refused until SetImageSize; the image callbacks' side works from the start, so
+  // that every pair received is counted.
+  explicit InputMonitor(const InputMonitorOptions& options,
+                        std::optional<cv::Size> image_size = std::nullopt);
+  void SetImageSize(const cv::Size& image_size);
 
   struct Verdict {
     bool track = true;   // false: refused (an event says why)
@@ -98,7 +104,7 @@ class InputMonitor {
  private:
   mutable std::mutex mutex_;
   InputMonitorOptions options_;
-  cv::Size image_size_;
+  std::optional<cv::Size> image_size_;  // the calibration's; none yet: pairs are refused
   InputCounts counts_;
   std::optional<double> last_stamp_;
   std::uint64_t last_tracked_arrival_ = 0;

@@ -67,6 +67,9 @@ class RelocalizationPolicy {
                                  const RelocalizationAnswer& answer);
   // The user's request could not be asked (Decision::failure): its answer.
   UserRelocalization FailUserRequest(const std::string& failure);
+  // The place stage could not be asked (a driver whose place stage is not running): the
+  // recovery tries again at its next due frame; a user's request is answered with `reason`.
+  RelocalizationOutcome OnNoAnswer(const RelocalizationRequest& request, const std::string& reason);
 
   // Whether the last frame had a pose in the map: mapping, its segment is in the map;
   // localization, map -> odom is known. And that pose (localization; T_map_odom * the odometry).

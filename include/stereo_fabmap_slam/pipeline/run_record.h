@@ -47,6 +47,9 @@ struct FrameRecord {
 FrameRecord RecordOf(const TrackingOutput& output, double timestamp);
 // timing.csv's account of a relocalization attempt: its outcome, keyframe and reason.
 std::string DescribeRelocalization(const relocalization::Relocalization& relocalization);
+// A relocalization's answer in its frame's record: its time and outcome, unless the answer was
+// that a loop had joined the frame's segment meanwhile (nothing was tried).
+void RecordRelocalization(const RelocalizationAnswer& answer, FrameRecord* record);
 
 // An ordered JSON object (summary.json): numbers, booleans and strings, in the order added.
 class JsonObject {

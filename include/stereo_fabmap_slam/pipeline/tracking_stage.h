@@ -54,11 +54,17 @@ class TrackingStage {
   // `attempt_every_n_frames`-th frame while recovering.
   TrackingStage(const FrontEndOptions& options, const camera::StereoRectifier& rectifier,
                 const InputMonitorOptions& input, int attempt_every_n_frames, Clock clock);
-  // The camera's pose in odom at the first frame (Tracker::SetStartPose): the nodelet's odom is
-  // the base's frame at the first frame, so its camera starts at its mounting.
-  void SetStartPose(const Eigen::Isometry3d& T_odom_camera) {
-    front_end_.SetStartPose(T_odom_camera);
-  }
+  // A stage whose camera is known later (a driver that reads the calibration from camera_info):
+  // until Calibrate it refuses every pair (counted, and named by an event), while mode changes,
+  // a loaded map and the relocalize service's requests are taken as always.
+  TrackingStage(const FrontEndOptions& options, const InputMonitorOptions& input,
+                int attempt_every_n_frames, Clock clock);
+  // The camera, once (std::logic_error for a second time), and its pose in odom at the first
+  // frame (Tracker::SetStartPose): the nodelet's odom is the base's frame at the first frame, so
+  // its camera starts at its mounting.
+  void Calibrate(const camera::StereoRectifier& rectifier,
+                 const Eigen::Isometry3d& T_odom_camera = Eigen::Isometry3d::Identity());
+  bool calibrated() const { return front_end_.has_value(); }
   // Another recovery rate (before the first frame).
   void SetAttemptEveryNFrames(int n) { policy_ = RelocalizationPolicy(n); }
 
@@ -69,11 +75,17 @@ class TrackingStage {
                                          const RelocalizationAnswer& answer) {
     return policy_.OnAnswer(request, answer);
   }
+  // The request could not be asked (RelocalizationPolicy::OnNoAnswer).
+  RelocalizationOutcome OnNoRelocalization(const RelocalizationRequest& request,
+                                           const std::string& reason) {
+    return policy_.OnNoAnswer(request, reason);
+  }
 
   // The bundle adjustment's corrections of the local map (MappedKeyframe::update).
-  void ApplyUpdate(const map::KeyframeUpdate& update) { front_end_.ApplyUpdate(update); }
+  void ApplyUpdate(const map::KeyframeUpdate& update);
   // A map was loaded: the odometry goes on in a new local map, continuous in odom, numbered
-  // above the map's keyframes and points, and is found in the map by relocalization.
+  // above the map's keyframes and points, and is found in the map by relocalization. Before
+  // Calibrate, the front end made then numbers from there.
   void OnMapLoaded(const LoadedMap& loaded);
   void SetMode(SlamMode mode, bool map_has_keyframes) { policy_.SetMode(mode, map_has_keyframes); }
   // The relocalize service: the next frame is found in the map; `reanchor` (mapping) corrects
@@ -89,16 +101,19 @@ class TrackingStage {
   // The driver's view of the input (single images, skipped pairs).
   InputMonitor& input() { return input_; }
   const InputMonitor& input() const { return input_; }
-  const StereoFrontEnd& front_end() const { return front_end_; }
-  const geometry::StereoCamera& camera() const { return front_end_.camera(); }
-  bool places() const { return places_; }
+  // The front end and its camera; std::logic_error before Calibrate.
+  const StereoFrontEnd& front_end() const;
+  const geometry::StereoCamera& camera() const { return front_end().camera(); }
+  bool places() const { return options_.place_features.has_value(); }
 
  private:
-  StereoFrontEnd front_end_;
+  FrontEndOptions options_;
+  std::optional<StereoFrontEnd> front_end_;  // none before Calibrate
   InputMonitor input_;
   RelocalizationPolicy policy_;
   Clock clock_;
-  bool places_;  // place descriptors are made: relocalization can be asked
+  // The ids a map loaded before Calibrate numbers the odometry's keyframes and points from.
+  std::int64_t first_keyframe_id_ = 0, first_point_id_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::pipeline
