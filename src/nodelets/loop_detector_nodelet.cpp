@@ -2,9 +2,9 @@
 // Backend's answers to them (keyframe_updates) in; a place result per mapped keyframe
 // (place_results) and relocalization edges out; the map's snapshot from map_graph. Services:
 // detect_loop, relocalize_frame (the StereoTracker's), save_map, load_map (and ~map_file at
-// start, ~save_map at the end), set_mode (and ~mode), announced as map_loaded and mode. The stage
-// decides; this file pairs each keyframe with its answer, converts, calls and publishes. A map
-// file or mode it refuses at start leaves it running with an empty map in mapping mode.
+// start, ~save_map at the end), set_mode (and ~mode), announced as map_loaded and mode. The
+// place service (pipeline::PlaceService) decides; this file pairs each keyframe with its answer,
+// converts, calls and publishes.
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -34,21 +34,19 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
     relocalize_service_.shutdown();  // before its queue
     pairing_.Stop();
     if (worker_.joinable()) worker_.join();
-    if (parameters_.save_map_at_exit.empty()) return;
-    stereo_fabmap_slam::MapFile::Request request;
-    stereo_fabmap_slam::MapFile::Response response;
-    request.path = parameters_.save_map_at_exit;
-    OnSaveMap(request, response);
-    ROS_INFO_STREAM("[loop_detector] ~save_map " << request.path << ": " << response.message);
+    if (parameters_.save_map_at_exit.empty() || !places_) return;
+    const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
+    std::lock_guard<std::mutex> lock(mutex_);  // a service call may still be answered
+    ROS_INFO_STREAM("[loop_detector] ~save_map "
+                    << parameters_.save_map_at_exit << ": "
+                    << places_->SaveMap(parameters_.save_map_at_exit, *map).message);
   }
 
  private:
   void onInit() override;
   void Work();
-  // Replaces the map by a file's and announces it; throws (the map is kept) for a file that is
-  // damaged or does not fit. Call with mutex_.
-  std::size_t LoadMap(const std::string& path);
-  bool SetMode(const std::string& name);  // announces it; false for an unknown name
+  void Announce(const pipeline::LoadedMapFile& file);  // the map until the Backend's graph
+  void Announce(pipeline::SlamMode mode);
   std::shared_ptr<const pipeline::MapSnapshot> Map() {
     std::lock_guard<std::mutex> lock(map_mutex_);
     return map_;
@@ -63,7 +61,9 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
                  stereo_fabmap_slam::MapFile::Response& response);
   bool OnSetMode(stereo_fabmap_slam::SetMode::Request& request,
                  stereo_fabmap_slam::SetMode::Response& response) {
-    response.success = SetMode(request.mode);
+    const std::optional<pipeline::SlamMode> mode = pipeline::ParseSlamMode(request.mode);
+    if (mode) Announce(*mode);
+    response.success = mode.has_value();
     response.message = response.success
                            ? "mode " + request.mode
                            : "unknown mode '" + request.mode + "' (mapping, localization)";
@@ -71,8 +71,8 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
   }
 
   ros_wiring::PlaceParameters parameters_;
-  std::mutex mutex_;  // the stage: the worker and the services share it
-  ros_wiring::PlaceStageHolder stage_{parameters_};
+  std::mutex mutex_;  // the service: the worker and the services share it
+  std::optional<pipeline::PlaceService> places_;
   std::mutex map_mutex_;
   std::shared_ptr<const pipeline::MapSnapshot> map_ = std::make_shared<pipeline::MapSnapshot>();
   ros_wiring::KeyframePairing pairing_;
@@ -103,23 +103,14 @@ void LoopDetectorNodelet::onInit() {
   edge_publisher_ = node.advertise<stereo_fabmap_slam::LoopEdge>("relocalization_edges", 100);
   loaded_publisher_ = node.advertise<stereo_fabmap_slam::MapLoaded>("map_loaded", 1, true);
   mode_publisher_ = node.advertise<std_msgs::String>("mode", 1, true);
-  // A refused ~mode or ~map_file leaves the node running, empty and mapping: the odometry goes
-  // on, and load_map or set_mode can put it right without a restart.
-  if (!SetMode(parameters_.mode)) {
-    NODELET_ERROR("~mode '%s' is not a mode (mapping, localization): mapping",
-                  parameters_.mode.c_str());
-    SetMode("mapping");
-  }
-  if (!parameters_.map_file.empty()) {
+  {
     std::lock_guard<std::mutex> lock(mutex_);
-    try {
-      NODELET_INFO("map %s loaded: %zu keyframes", parameters_.map_file.c_str(),
-                   LoadMap(parameters_.map_file));
-    } catch (const std::exception& error) {
-      NODELET_ERROR("~map_file refused: %s; running with an empty map in mapping mode",
-                    error.what());
-      SetMode("mapping");
-    }
+    places_.emplace(ros_wiring::MakePlaceService(parameters_));
+    const pipeline::PlaceService::StartUp start =
+        places_->Start(parameters_.mode, parameters_.map_file);
+    for (const std::string& error : start.errors) NODELET_ERROR("%s", error.c_str());
+    Announce(start.mode);
+    if (start.map) Announce(*start.map);
   }
   save_service_ = node.advertiseService("save_map", &LoopDetectorNodelet::OnSaveMap, this);
   load_service_ = node.advertiseService("load_map", &LoopDetectorNodelet::OnLoadMap, this);
@@ -158,19 +149,13 @@ void LoopDetectorNodelet::Work() {
     }
     try {
       std::lock_guard<std::mutex> lock(mutex_);
-      // A LoopDetector (re)started while the tracker runs: say what its places do not cover.
-      if (stage_.get() == nullptr && pair->keyframe->id > 0) {
-        NODELET_WARN(
-            "first keyframe received is %lu: the keyframes before it are not places "
-            "of this LoopDetector (restarted while the tracker ran?)",
-            static_cast<unsigned long>(pair->keyframe->id));
-      }
-      pipeline::PlaceStage& stage = stage_.For(ros_conversions::CameraOfKeyframe(*pair->keyframe));
-      const pipeline::MappedKeyframe mapped =
-          ros_conversions::FromMappedKeyframeMessage(*pair->update);
-      stage.AddKeyframe(ros_conversions::FromKeyframeMessage(*pair->keyframe), mapped);
-      if (!mapped.in_map_graph) continue;
-      const pipeline::PlaceResult result = stage.DetectLoop(mapped.keyframe_id);
+      const pipeline::PlaceService::KeyframeOutcome outcome =
+          places_->Take(ros_conversions::FromKeyframeMessage(*pair->keyframe),
+                        ros_conversions::CameraOfKeyframe(*pair->keyframe),
+                        ros_conversions::FromMappedKeyframeMessage(*pair->update));
+      for (const std::string& warning : outcome.warnings) NODELET_WARN("%s", warning.c_str());
+      if (!outcome.result) continue;
+      const pipeline::PlaceResult& result = *outcome.result;
       stereo_fabmap_slam::PlaceResult message = ros_conversions::ToPlaceResultMessage(result);
       message.header.frame_id = pair->keyframe->header.frame_id;
       place_publisher_.publish(message);
@@ -186,26 +171,21 @@ void LoopDetectorNodelet::Work() {
   }
 }
 
-std::size_t LoopDetectorNodelet::LoadMap(const std::string& path) {
-  const map::SavedMap saved = map::LoadMapFile(path);
-  const pipeline::LoadedMap loaded = stage_.Load(saved);
-  // Until the Backend publishes its graph rebuilt from the same file, the map is the file's.
-  auto map = std::make_shared<pipeline::MapSnapshot>(ros_wiring::SnapshotOfSavedMap(saved));
+void LoopDetectorNodelet::Announce(const pipeline::LoadedMapFile& file) {
+  auto map = std::make_shared<pipeline::MapSnapshot>(file.map);
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     map_ = std::move(map);
   }
-  loaded_publisher_.publish(ros_conversions::ToMapLoadedMessage(path, loaded));
-  return loaded.keyframes;
+  loaded_publisher_.publish(ros_conversions::ToMapLoadedMessage(file.path, file.loaded));
+  NODELET_INFO("map %s loaded: %zu keyframes", file.path.c_str(), file.loaded.keyframes);
 }
 
-bool LoopDetectorNodelet::SetMode(const std::string& name) {
-  if (!pipeline::ParseSlamMode(name)) return false;
+void LoopDetectorNodelet::Announce(pipeline::SlamMode mode) {
   std_msgs::String message;
-  message.data = name;
+  message.data = pipeline::SlamModeName(mode);
   mode_publisher_.publish(message);
-  NODELET_INFO("mode %s", name.c_str());
-  return true;
+  NODELET_INFO("mode %s", message.data.c_str());
 }
 
 bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
@@ -215,14 +195,11 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
   query.add = request.add_to_map;
   std::lock_guard<std::mutex> lock(mutex_);
   try {
-    if (query.stored_id < 0)
+    if (query.stored_id < 0) {
       query.keyframe = ros_conversions::FromKeyframeMessage(request.keyframe);
-    response.message = pipeline::LoopQueryRefusal(query, stage_.get());
-    if (!response.message.empty()) return true;
-    pipeline::PlaceStage& stage =
-        query.stored_id >= 0 ? *stage_.get()
-                             : stage_.For(ros_conversions::CameraOfKeyframe(request.keyframe));
-    ros_wiring::FillDetectLoopResponse(stage.Answer(query), &response);
+    }
+    ros_wiring::FillDetectLoopResponse(
+        places_->Answer(query, ros_conversions::CameraOfKeyframe(request.keyframe)), &response);
   } catch (const std::exception& error) {
     response.success = false;
     response.message = error.what();
@@ -237,13 +214,8 @@ bool LoopDetectorNodelet::OnRelocalizeFrame(
   std::lock_guard<std::mutex> lock(mutex_);
   response.keyframe_id = -1;
   try {
-    if (stage_.empty()) {
-      response.status = "empty map";
-      response.message = "the map is empty";
-      return true;
-    }
     const pipeline::RelocalizationAnswer answer =
-        stage_.get()->Relocalize(ros_conversions::FromRelocalizeFrameRequest(request), *map);
+        places_->Relocalize(ros_conversions::FromRelocalizeFrameRequest(request), *map);
     response = ros_conversions::ToRelocalizeFrameResponse(answer);
     if (answer.edge) {
       stereo_fabmap_slam::LoopEdge edge = response.edge;
@@ -265,34 +237,16 @@ bool LoopDetectorNodelet::OnSaveMap(stereo_fabmap_slam::MapFile::Request& reques
                                     stereo_fabmap_slam::MapFile::Response& response) {
   const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (stage_.empty()) {
-    response.message = "the map is empty";
-    return true;
-  }
-  try {
-    const map::SavedMap saved = stage_.get()->Save(*map, stage_.camera());
-    map::SaveMapFile(request.path, saved);
-    response.success = true;
-    response.keyframes = static_cast<std::uint32_t>(saved.keyframes.size());
-    response.message = "saved " + std::to_string(saved.keyframes.size()) + " keyframes and " +
-                       std::to_string(saved.edges.size()) + " loop and relocalization edges";
-  } catch (const std::exception& error) {
-    response.message = error.what();
-  }
+  ros_wiring::FillMapFileResponse(places_->SaveMap(request.path, *map), &response);
   return true;
 }
 
 bool LoopDetectorNodelet::OnLoadMap(stereo_fabmap_slam::MapFile::Request& request,
                                     stereo_fabmap_slam::MapFile::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
-  try {
-    response.keyframes = static_cast<std::uint32_t>(LoadMap(request.path));
-    response.success = true;
-    response.message = "loaded " + std::to_string(response.keyframes) + " keyframes";
-    NODELET_INFO("map %s loaded: %u keyframes", request.path.c_str(), response.keyframes);
-  } catch (const std::exception& error) {
-    response.message = std::string(error.what()) + "; the map is unchanged";
-  }
+  std::optional<pipeline::LoadedMapFile> loaded;
+  ros_wiring::FillMapFileResponse(places_->LoadMap(request.path, &loaded), &response);
+  if (loaded) Announce(*loaded);
   return true;
 }
 

@@ -5,7 +5,6 @@
 
 #include "parameter_reader.h"
 #include "ros_conversions.h"
-#include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 #include "stereo_fabmap_slam/place_recognition/vocabulary.h"
 
 namespace stereo_fabmap_slam::ros_wiring {
@@ -82,39 +81,26 @@ void KeyframePairing::Stop() {
   changed_.notify_all();
 }
 
-pipeline::PlaceStage& PlaceStageHolder::For(const geometry::StereoCamera& camera) {
-  if (!stage_) {
-    stage_.emplace(pipeline::PlaceStage::LoadDetector(parameters_.place, parameters_.detection,
-                                                      camera, parameters_.descriptor.norm,
-                                                      parameters_.descriptor.max_match_distance),
-                   parameters_.relocalizer, [] {
-                     return std::chrono::duration<double, std::milli>(
-                                std::chrono::steady_clock::now().time_since_epoch())
-                         .count();
-                   });
-    camera_ = camera;
-  }
-  return *stage_;
+pipeline::PlaceService MakePlaceService(const PlaceParameters& parameters) {
+  // Copied: the service outlives no parameters it refers to.
+  return pipeline::PlaceService([parameters](const geometry::StereoCamera& camera) {
+    return pipeline::PlaceStage(
+        pipeline::PlaceStage::LoadDetector(parameters.place, parameters.detection, camera,
+                                           parameters.descriptor.norm,
+                                           parameters.descriptor.max_match_distance),
+        parameters.relocalizer, [] {
+          return std::chrono::duration<double, std::milli>(
+                     std::chrono::steady_clock::now().time_since_epoch())
+              .count();
+        });
+  });
 }
 
-pipeline::LoadedMap PlaceStageHolder::Load(const map::SavedMap& saved) {
-  const bool fresh = !stage_;
-  try {
-    return For(saved.camera).Load(saved, *camera_);
-  } catch (...) {
-    if (fresh) {
-      stage_.reset();
-      camera_.reset();
-    }
-    throw;
-  }
-}
-
-pipeline::MapSnapshot SnapshotOfSavedMap(const map::SavedMap& saved) {
-  pipeline::MappingStage mapping(backend::BundleAdjustmentOptions(), backend::PoseGraphOptions(),
-                                 [] { return 0.0; });
-  mapping.Load(saved);
-  return mapping.Snapshot();
+void FillMapFileResponse(const pipeline::MapFileAnswer& answer,
+                         stereo_fabmap_slam::MapFile::Response* response) {
+  response->success = answer.success;
+  response->keyframes = static_cast<std::uint32_t>(answer.keyframes);
+  response->message = answer.message;
 }
 
 void FillDetectLoopResponse(const place_recognition::LoopDetection& detection,

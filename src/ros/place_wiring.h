@@ -16,10 +16,12 @@
 #include <stereo_fabmap_slam/DetectLoop.h>
 #include <stereo_fabmap_slam/Keyframe.h>
 #include <stereo_fabmap_slam/KeyframeUpdate.h>
+#include <stereo_fabmap_slam/MapFile.h>
 
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/map/map_file.h"
 #include "stereo_fabmap_slam/pipeline/map_state.h"
+#include "stereo_fabmap_slam/pipeline/place_service.h"
 #include "stereo_fabmap_slam/pipeline/place_stage.h"
 #include "stereo_fabmap_slam/place_recognition/loop_detector.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -70,29 +72,12 @@ class KeyframePairing {
   bool stopping_ = false;
 };
 
-// The place stage, made once with the map's camera: the first keyframe's, or a loaded map's
-// (the Backend then refuses keyframes of another camera). Call under the nodelet's lock.
-class PlaceStageHolder {
- public:
-  explicit PlaceStageHolder(const PlaceParameters& parameters) : parameters_(parameters) {}
-  // The stage, made for `camera` if there is none yet.
-  pipeline::PlaceStage& For(const geometry::StereoCamera& camera);
-  // Loads a saved map (PlaceStage::Load) into the stage, made for the map's camera if there is
-  // none yet; a refused map leaves no stage made for it (the next keyframe brings the camera).
-  pipeline::LoadedMap Load(const map::SavedMap& saved);
-  pipeline::PlaceStage* get() { return stage_ ? &*stage_ : nullptr; }
-  bool empty() const { return !stage_ || stage_->empty(); }
-  const geometry::StereoCamera& camera() const { return *camera_; }
+// The place service whose stage loads the parameters' vocabulary for the map's camera.
+pipeline::PlaceService MakePlaceService(const PlaceParameters& parameters);
 
- private:
-  const PlaceParameters& parameters_;
-  std::optional<pipeline::PlaceStage> stage_;
-  std::optional<geometry::StereoCamera> camera_;
-};
-
-// A saved map's state as the mapping stage will have it once it has loaded the same map (the
-// place stage's view until the Backend publishes its graph).
-pipeline::MapSnapshot SnapshotOfSavedMap(const map::SavedMap& saved);
+// The save_map and load_map services' answer.
+void FillMapFileResponse(const pipeline::MapFileAnswer& answer,
+                         stereo_fabmap_slam::MapFile::Response* response);
 
 // The detect_loop service's answer.
 void FillDetectLoopResponse(const place_recognition::LoopDetection& detection,

@@ -1,12 +1,17 @@
 // The place stage's answers to questions from outside the pipeline (the detect_loop service):
 // what it refuses and why, and that a keyframe asked to join becomes a place like the mapping
-// stage's.
+// stage's. And the place service the LoopDetector runs it through: a stage made with the first
+// camera, start-up with a mode and map file that may be refused, map files, all said in words.
 #include "stereo_fabmap_slam/pipeline/place_stage.h"
+
+#include <fstream>
 
 #include <gtest/gtest.h>
 
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
+#include "stereo_fabmap_slam/pipeline/place_service.h"
 #include "stereo_world.h"
+#include "test_support.h"
 #include "toy_place_recognition.h"
 
 namespace stereo_fabmap_slam::test {
@@ -83,6 +88,117 @@ TEST_F(PlaceStageQueries, AKeyframeAskedToJoinBecomesAPlace) {
   asked.keyframe = Keyframe(6);
   place_.Answer(asked);
   EXPECT_FALSE(place_.detector().database().Contains(6)) << "asked only";
+}
+
+// A place service over the toy vocabulary; counts the stages it makes.
+pipeline::PlaceService ToyPlaceService(int* stages_made) {
+  return pipeline::PlaceService([stages_made](const geometry::StereoCamera&) {
+    ++*stages_made;
+    return pipeline::PlaceStage(ToyLoopDetector(3), relocalization::RelocalizerOptions(),
+                                [] { return 0.0; });
+  });
+}
+
+bool Contains(const std::vector<std::string>& texts, const std::string& part) {
+  for (const std::string& text : texts) {
+    if (text.find(part) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST_F(PlaceStageQueries, AServiceStartsEmptyAndMappingWhenItsModeOrMapIsRefused) {
+  TemporaryDirectory temp;
+  int stages = 0;
+  pipeline::PlaceService service = ToyPlaceService(&stages);
+  const pipeline::PlaceService::StartUp plain = service.Start("localization", "");
+  EXPECT_EQ(plain.mode, pipeline::SlamMode::kLocalization);
+  EXPECT_TRUE(plain.errors.empty());
+  EXPECT_FALSE(plain.map.has_value());
+
+  const pipeline::PlaceService::StartUp bogus = service.Start("bogus", "");
+  EXPECT_EQ(bogus.mode, pipeline::SlamMode::kMapping);
+  EXPECT_TRUE(Contains(bogus.errors, "~mode 'bogus' is not a mode (mapping, localization)"));
+
+  // Localization in a map that is not there, or damaged: mapping afresh, and no stage made for a
+  // map refused (the first keyframe's camera makes it).
+  const std::string damaged = temp.path() + "/damaged.map";
+  std::ofstream(damaged) << "not a map";
+  for (const std::string& file : {temp.path() + "/missing.map", damaged}) {
+    const pipeline::PlaceService::StartUp refused = service.Start("localization", file);
+    EXPECT_EQ(refused.mode, pipeline::SlamMode::kMapping) << file;
+    EXPECT_FALSE(refused.map.has_value());
+    EXPECT_TRUE(Contains(refused.errors, "~map_file refused: ")) << file;
+    EXPECT_TRUE(Contains(refused.errors, "running with an empty map in mapping mode"));
+    EXPECT_TRUE(service.empty());
+    EXPECT_EQ(service.stage(), nullptr);
+  }
+  EXPECT_EQ(stages, 0) << "a file refused before its vocabulary was read makes no stage";
+  pipeline::RelocalizationRequest request;
+  EXPECT_EQ(service.Relocalize(request, mapping_).result.status,
+            relocalization::RelocalizationStatus::kEmptyMap);
+  EXPECT_EQ(service.SaveMap(temp.path() + "/empty.map", mapping_).message, "the map is empty");
+}
+
+TEST_F(PlaceStageQueries, AServiceSavesAndLoadsMapsAndSaysWhatItsPlacesDoNotCover) {
+  TemporaryDirectory temp;
+  int stages = 0;
+  pipeline::PlaceService service = ToyPlaceService(&stages);
+  for (std::int64_t id = 0; id < 4; ++id) {
+    const map::Keyframe keyframe = Keyframe(id);
+    const pipeline::PlaceService::KeyframeOutcome outcome =
+        service.Take(keyframe, kTestCamera, mapping_.AddKeyframe(keyframe, kTestCamera));
+    EXPECT_TRUE(outcome.warnings.empty()) << "it saw the run from its first keyframe";
+    ASSERT_TRUE(outcome.result.has_value()) << "in the map graph: a place, and its detection";
+    EXPECT_EQ(outcome.result->keyframe_id, id);
+  }
+  EXPECT_EQ(stages, 1);
+  const std::string path = temp.path() + "/four.map";
+  const pipeline::MapFileAnswer saved = service.SaveMap(path, mapping_);
+  EXPECT_TRUE(saved.success) << saved.message;
+  EXPECT_EQ(saved.keyframes, 4u);
+  EXPECT_EQ(saved.message, "saved 4 keyframes and 0 loop and relocalization edges");
+  const pipeline::MapFileAnswer unwritable = service.SaveMap(temp.path(), mapping_);
+  EXPECT_FALSE(unwritable.success) << "a directory is no file";
+
+  // Started while the odometry ran: its first keyframe is 6.
+  int restarted_stages = 0;
+  pipeline::PlaceService restarted = ToyPlaceService(&restarted_stages);
+  const map::Keyframe late = Keyframe(6);
+  pipeline::MappingStage other_mapping(backend::BundleAdjustmentOptions(),
+                                       backend::PoseGraphOptions(), [] { return 0.0; });
+  EXPECT_TRUE(Contains(
+      restarted.Take(late, kTestCamera, other_mapping.AddKeyframe(late, kTestCamera)).warnings,
+      "first keyframe received is 6: the keyframes before it are not places"));
+
+  // Loaded into a service without a stage: made with the map's camera, numbered above it, and
+  // the map as the mapping stage will rebuild it from the same file.
+  int loaded_stages = 0;
+  pipeline::PlaceService loading = ToyPlaceService(&loaded_stages);
+  std::optional<pipeline::LoadedMapFile> loaded;
+  const pipeline::MapFileAnswer answer = loading.LoadMap(path, &loaded);
+  ASSERT_TRUE(answer.success) << answer.message;
+  EXPECT_EQ(answer.message, "loaded 4 keyframes");
+  ASSERT_TRUE(loaded.has_value());
+  EXPECT_EQ(loaded->path, path);
+  EXPECT_EQ(loaded->loaded.keyframes, 4u);
+  EXPECT_EQ(loaded->loaded.next_keyframe_id, 4);
+  ASSERT_EQ(loaded->map.keyframes.size(), 4u);
+  for (std::int64_t id = 0; id < 4; ++id) {
+    EXPECT_TRUE(loaded->map.InMap(id));
+    EXPECT_TRUE(loaded->map.MapPose(id).isApprox(mapping_.MapPose(id), 1e-9)) << id;
+  }
+  EXPECT_EQ(loaded_stages, 1);
+  // A file refused later leaves the loaded map as it was.
+  std::optional<pipeline::LoadedMapFile> none;
+  const pipeline::MapFileAnswer refused = loading.LoadMap(temp.path() + "/missing.map", &none);
+  EXPECT_FALSE(refused.success);
+  EXPECT_NE(refused.message.find("; the map is unchanged"), std::string::npos) << refused.message;
+  EXPECT_FALSE(none.has_value());
+  ASSERT_NE(loading.stage(), nullptr);
+  EXPECT_TRUE(loading.stage()->detector().database().Contains(3));
+  // Loop queries go through the same checks as the stage's.
+  EXPECT_THROW(restarted.Answer(Stored(2), kTestCamera), std::invalid_argument);
+  EXPECT_NO_THROW(loading.Answer(Stored(2), kTestCamera));
 }
 
 }  // namespace

@@ -1,0 +1,90 @@
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "stereo_fabmap_slam/geometry/stereo_camera.h"
+#include "stereo_fabmap_slam/map/keyframe.h"
+#include "stereo_fabmap_slam/pipeline/map_state.h"
+#include "stereo_fabmap_slam/pipeline/mapping_stage.h"
+#include "stereo_fabmap_slam/pipeline/place_stage.h"
+#include "stereo_fabmap_slam/pipeline/slam_mode.h"
+
+namespace stereo_fabmap_slam::pipeline {
+
+// What a request about a map file came to, in words for whoever asked.
+struct MapFileAnswer {
+  bool success = false;
+  std::size_t keyframes = 0;
+  std::string message;
+};
+
+// A map file the place stage took: what the other stages are told, and the map until the
+// mapping stage, which loads the same file, says otherwise.
+struct LoadedMapFile {
+  std::string path;
+  LoadedMap loaded;
+  MapSnapshot map;  // the file's map as MappingStage::Load rebuilds it
+};
+
+// The place stage as a driver that runs apart from the other stages (the LoopDetector nodelet)
+// needs it: made once the map's camera is known (the first keyframe's, or a loaded map's: the
+// vocabulary's words depend on it), map files and modes by path and by name, and every refusal
+// said in words. StereoSlam, which knows its camera from the start, uses the PlaceStage itself.
+// One caller at a time.
+class PlaceService {
+ public:
+  // Makes the place stage for a camera (loads the vocabulary; throws io::InputError).
+  using StageMaker = std::function<PlaceStage(const geometry::StereoCamera&)>;
+  explicit PlaceService(StageMaker make_stage) : make_stage_(std::move(make_stage)) {}
+
+  // The mode and map file a user asked for at start ("": no file). A mode that is none, or a map
+  // that cannot be loaded, leaves the service empty and mapping, with `errors` saying why: the
+  // odometry goes on, and LoadMap or a mode given later put it right without a restart.
+  struct StartUp {
+    SlamMode mode = SlamMode::kMapping;
+    std::optional<LoadedMapFile> map;
+    std::vector<std::string> errors;
+  };
+  StartUp Start(const std::string& mode_name, const std::string& map_file);
+
+  // A keyframe and the mapping stage's answer to it: a place if the graph took it, and then its
+  // loop detection. `warnings`: the first keyframe of a service started while the odometry ran
+  // (the keyframes before it are no places). Throws std::invalid_argument for place descriptors
+  // that do not fit the vocabulary.
+  struct KeyframeOutcome {
+    std::optional<PlaceResult> result;
+    std::vector<std::string> warnings;
+  };
+  KeyframeOutcome Take(const map::Keyframe& keyframe, const geometry::StereoCamera& camera,
+                       const MappedKeyframe& mapped);
+
+  // Loop detection of a LoopQuery (PlaceStage::Answer); `camera`: the query's keyframe's, for a
+  // service that has no stage yet. Throws std::invalid_argument with LoopQueryRefusal's reason.
+  place_recognition::LoopDetection Answer(const LoopQuery& query,
+                                          const geometry::StereoCamera& camera);
+  // PlaceStage::Relocalize; an empty map answers kEmptyMap.
+  RelocalizationAnswer Relocalize(const RelocalizationRequest& request, const MapState& map) const;
+
+  // Saves the map (`map`: the mapping stage's state) to `path`; refuses an empty map.
+  MapFileAnswer SaveMap(const std::string& path, const MapState& map) const;
+  // Replaces the map by the file's (PlaceStage::Load's checks); on success `loaded` receives what
+  // to tell the other stages. A refused file leaves the map as it was and says why.
+  MapFileAnswer LoadMap(const std::string& path, std::optional<LoadedMapFile>* loaded);
+
+  bool empty() const { return !stage_ || stage_->empty(); }
+  const PlaceStage* stage() const { return stage_ ? &*stage_ : nullptr; }
+
+ private:
+  PlaceStage& StageFor(const geometry::StereoCamera& camera);
+  // LoadMap's work; throws saying why a file is refused (the map is then as it was).
+  LoadedMapFile Load(const std::string& path);
+
+  StageMaker make_stage_;
+  std::optional<PlaceStage> stage_;
+  std::optional<geometry::StereoCamera> camera_;  // the stage's
+};
+
+}  // namespace stereo_fabmap_slam::pipeline
