@@ -28,20 +28,34 @@ std::uint64_t Fnv1a64(const std::uint8_t* data, std::size_t size) {
 
 void WriteBinaryFile(const std::string& path, const char (&magic)[9], std::uint32_t version,
                      const std::vector<std::uint8_t>& payload) {
+  // Refused before anything is written: a failed save leaves no file behind.
+  if (path.empty()) throw FileError(path, 0, "no file named (an empty path)");
+  if (std::filesystem::is_directory(path)) throw FileError(path, 0, "is a directory");
   const std::string temporary = path + ".partial";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw FileError(path, 0, "cannot open for writing");
-    const std::uint64_t length = payload.size(), checksum = Fnv1a64(payload.data(), payload.size());
-    out.write(magic, 8);
-    out.write(reinterpret_cast<const char*>(&version), sizeof(version));
-    out.write(reinterpret_cast<const char*>(&length), sizeof(length));
-    out.write(reinterpret_cast<const char*>(payload.data()),
-              static_cast<std::streamsize>(payload.size()));
-    out.write(reinterpret_cast<const char*>(&checksum), sizeof(checksum));
-    if (!out) throw FileError(path, 0, "write error");
+  try {
+    {
+      std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+      if (!out) throw FileError(path, 0, "cannot open for writing");
+      const std::uint64_t length = payload.size(),
+                          checksum = Fnv1a64(payload.data(), payload.size());
+      out.write(magic, 8);
+      out.write(reinterpret_cast<const char*>(&version), sizeof(version));
+      out.write(reinterpret_cast<const char*>(&length), sizeof(length));
+      out.write(reinterpret_cast<const char*>(payload.data()),
+                static_cast<std::streamsize>(payload.size()));
+      out.write(reinterpret_cast<const char*>(&checksum), sizeof(checksum));
+      if (!out) throw FileError(path, 0, "write error");
+    }
+    std::filesystem::rename(temporary, path);
+  } catch (const std::filesystem::filesystem_error& error) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw FileError(path, 0, std::string("cannot replace: ") + error.code().message());
+  } catch (...) {
+    std::error_code ignored;  // a full disk: what was written goes
+    std::filesystem::remove(temporary, ignored);
+    throw;
   }
-  std::filesystem::rename(temporary, path);
 }
 
 BinaryReader ReadBinaryFile(const std::string& path, const char (&magic)[9],

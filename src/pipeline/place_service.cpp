@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/pipeline/place_service.h"
 
+#include <filesystem>
 #include <stdexcept>
 
 #include "stereo_fabmap_slam/map/map_file.h"
@@ -13,6 +14,13 @@ MapSnapshot SnapshotOfSavedMap(const map::SavedMap& saved) {
                        [] { return 0.0; });
   mapping.Load(saved);
   return mapping.Snapshot();
+}
+
+// `path` from the root: a relative path is the process's working directory's (under roslaunch
+// $ROS_HOME, which the caller of a service may not know), so answers name the whole path.
+std::string WholePath(const std::string& path) {
+  if (path.empty()) throw std::invalid_argument("no file named (an empty path)");
+  return std::filesystem::absolute(path).lexically_normal().string();
 }
 
 }  // namespace
@@ -89,12 +97,14 @@ MapFileAnswer PlaceService::SaveMap(const std::string& path, const MapState& map
     return answer;
   }
   try {
+    const std::string file = WholePath(path);
     const map::SavedMap saved = stage_->Save(map, *camera_);
-    map::SaveMapFile(path, saved);
+    map::SaveMapFile(file, saved);
     answer.success = true;
     answer.keyframes = saved.keyframes.size();
     answer.message = "saved " + std::to_string(saved.keyframes.size()) + " keyframes and " +
-                     std::to_string(saved.edges.size()) + " loop and relocalization edges";
+                     std::to_string(saved.edges.size()) + " loop and relocalization edges to " +
+                     file;
   } catch (const std::exception& error) {
     answer.message = error.what();
   }
@@ -107,7 +117,8 @@ MapFileAnswer PlaceService::LoadMap(const std::string& path, std::optional<Loade
     *loaded = Load(path);
     answer.success = true;
     answer.keyframes = (*loaded)->loaded.keyframes;
-    answer.message = "loaded " + std::to_string(answer.keyframes) + " keyframes";
+    answer.message =
+        "loaded " + std::to_string(answer.keyframes) + " keyframes from " + (*loaded)->path;
   } catch (const std::exception& error) {
     answer.message = std::string(error.what()) + "; the map is unchanged";
   }
@@ -117,11 +128,12 @@ MapFileAnswer PlaceService::LoadMap(const std::string& path, std::optional<Loade
 LoadedMapFile PlaceService::Load(const std::string& path) {
   const bool fresh = !stage_;
   try {
-    const map::SavedMap saved = map::LoadMapFile(path);
+    const std::string file = WholePath(path);
+    const map::SavedMap saved = map::LoadMapFile(file);
     // A service without a stage takes the map's camera; the mapping stage then refuses
     // keyframes of another.
     const LoadedMap loaded = StageFor(saved.camera).Load(saved, *camera_);
-    return {path, loaded, SnapshotOfSavedMap(saved)};
+    return {file, loaded, SnapshotOfSavedMap(saved)};
   } catch (...) {
     if (fresh) {  // no stage made for a map refused: the next keyframe brings the camera
       stage_.reset();

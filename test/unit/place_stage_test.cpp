@@ -4,6 +4,7 @@
 // camera, start-up with a mode and map file that may be refused, map files, all said in words.
 #include "stereo_fabmap_slam/pipeline/place_stage.h"
 
+#include <filesystem>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -156,9 +157,27 @@ TEST_F(PlaceStageQueries, AServiceSavesAndLoadsMapsAndSaysWhatItsPlacesDoNotCove
   const pipeline::MapFileAnswer saved = service.SaveMap(path, mapping_);
   EXPECT_TRUE(saved.success) << saved.message;
   EXPECT_EQ(saved.keyframes, 4u);
-  EXPECT_EQ(saved.message, "saved 4 keyframes and 0 loop and relocalization edges");
-  const pipeline::MapFileAnswer unwritable = service.SaveMap(temp.path(), mapping_);
-  EXPECT_FALSE(unwritable.success) << "a directory is no file";
+  EXPECT_EQ(saved.message, "saved 4 keyframes and 0 loop and relocalization edges to " + path);
+  // Refused saves leave nothing behind (a 4 MB ".partial" beside a directory before).
+  const pipeline::MapFileAnswer directory = service.SaveMap(temp.path(), mapping_);
+  EXPECT_FALSE(directory.success) << "a directory is no file";
+  EXPECT_NE(directory.message.find("is a directory"), std::string::npos) << directory.message;
+  EXPECT_FALSE(std::filesystem::exists(temp.path() + ".partial"));
+  const pipeline::MapFileAnswer unnamed = service.SaveMap("", mapping_);
+  EXPECT_FALSE(unnamed.success);
+  EXPECT_NE(unnamed.message.find("empty path"), std::string::npos) << unnamed.message;
+  const std::string missing_folder = temp.path() + "/no/such/folder/four.map";
+  EXPECT_FALSE(service.SaveMap(missing_folder, mapping_).success);
+  EXPECT_FALSE(std::filesystem::exists(missing_folder + ".partial"));
+  // A relative path is the working directory's, and the answer says where that is.
+  const std::filesystem::path working = std::filesystem::current_path();
+  std::filesystem::current_path(temp.path());
+  const pipeline::MapFileAnswer relative = service.SaveMap("relative.map", mapping_);
+  std::filesystem::current_path(working);
+  EXPECT_TRUE(relative.success) << relative.message;
+  EXPECT_NE(relative.message.find(" to " + temp.path() + "/relative.map"), std::string::npos)
+      << relative.message;
+  EXPECT_TRUE(std::filesystem::exists(temp.path() + "/relative.map"));
 
   // Started while the odometry ran: its first keyframe is 6.
   int restarted_stages = 0;
@@ -177,7 +196,7 @@ TEST_F(PlaceStageQueries, AServiceSavesAndLoadsMapsAndSaysWhatItsPlacesDoNotCove
   std::optional<pipeline::LoadedMapFile> loaded;
   const pipeline::MapFileAnswer answer = loading.LoadMap(path, &loaded);
   ASSERT_TRUE(answer.success) << answer.message;
-  EXPECT_EQ(answer.message, "loaded 4 keyframes");
+  EXPECT_EQ(answer.message, "loaded 4 keyframes from " + path);
   ASSERT_TRUE(loaded.has_value());
   EXPECT_EQ(loaded->path, path);
   EXPECT_EQ(loaded->loaded.keyframes, 4u);

@@ -24,7 +24,7 @@ struct MapFileAnswer {
 // A map file the place stage took: what the other stages are told, and the map until the
 // mapping stage, which loads the same file, says otherwise.
 struct LoadedMapFile {
-  std::string path;
+  std::string path;  // from the root
   LoadedMap loaded;
   MapSnapshot map;  // the file's map as MappingStage::Load rebuilds it
 };
@@ -68,10 +68,13 @@ class PlaceService {
   // PlaceStage::Relocalize; an empty map answers kEmptyMap.
   RelocalizationAnswer Relocalize(const RelocalizationRequest& request, const MapState& map) const;
 
-  // Saves the map (`map`: the mapping stage's state) to `path`; refuses an empty map.
+  // Saves the map (`map`: the mapping stage's state) to `path`; refuses an empty map. Answers
+  // name the whole path (a relative one is the working directory's). A failed save leaves no
+  // file behind.
   MapFileAnswer SaveMap(const std::string& path, const MapState& map) const;
   // Replaces the map by the file's (PlaceStage::Load's checks); on success `loaded` receives what
-  // to tell the other stages. A refused file leaves the map as it was and says why.
+  // to tell the other stages, its path whole. A refused file leaves the map as it was and says
+  // why.
   MapFileAnswer LoadMap(const std::string& path, std::optional<LoadedMapFile>* loaded);
 
   bool empty() const { return !stage_ || stage_->empty(); }
