@@ -92,6 +92,8 @@ void BackendNodelet::onInit() {
   try {  // before any ROS object exists: a throw unloads cleanly
     options = ros_parameters::ReadModuleOptions(private_node, options);
     pose_graph_options = ros_parameters::ReadModuleOptions(private_node, pose_graph_options);
+    ros_parameters::RejectUnknownParameters(
+        private_node, {"config_file", "map_frame", "odom_frame", "publish_tf", "tf_rate"});
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;

@@ -11,6 +11,7 @@
 #include <ros/ros.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "parameter_reader.h"
 #include "run_recorder.h"
 #include "tracker_wiring.h"
 
@@ -49,6 +50,12 @@ class RecorderNodelet : public nodelet::Nodelet {
 };
 
 void RecorderNodelet::onInit() {
+  try {
+    ros_parameters::RejectUnknownParameters(getPrivateNodeHandle(), {"loop_closing", "output"});
+  } catch (const std::exception& error) {
+    NODELET_FATAL_STREAM("bad configuration: " << error.what());
+    throw;
+  }
   output_ = getPrivateNodeHandle().param<std::string>("output", "");
   if (output_.empty()) {
     NODELET_ERROR("~output is not set: nothing will be written");

@@ -18,6 +18,7 @@
 
 #include "map_cloud.h"
 #include "map_markers.h"
+#include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "trajectory_paths.h"
 
@@ -62,6 +63,14 @@ void VisualizerNodelet::onInit() {
   if (max_path_poses_ < 1 || max_cloud_points_ < 1 || rate <= 0 || style_.frustum_depth <= 0) {
     NODELET_FATAL("~max_path_poses, ~max_cloud_points, ~rate and ~frustum_depth must be > 0");
     throw std::runtime_error("bad Visualizer parameters");
+  }
+  try {
+    ros_parameters::RejectUnknownParameters(
+        private_node, {"edge_width", "frustum_depth", "line_width", "map_frame", "max_cloud_points",
+                       "max_path_poses", "odom_frame", "rate"});
+  } catch (const std::exception& error) {
+    NODELET_FATAL_STREAM("bad configuration: " << error.what());
+    throw;
   }
 
   // Latched: an rviz started later sees the map at once.

@@ -47,6 +47,29 @@ void RosParameterReader::RejectUnknownKeys() const {
                               "': " + accepted + ")");
 }
 
+void RejectUnknownParameters(const ros::NodeHandle& private_node,
+                             const std::set<std::string>& accepted) {
+  std::vector<std::string> names;
+  if (!private_node.getParamNames(names)) return;  // no master: nothing was read from it either
+  const std::string prefix = private_node.getNamespace() + "/";
+  std::string unknown;
+  for (const std::string& name : names) {
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string key = name.substr(prefix.size());
+    // Keys of sections ("features/max_features") are the sections' readers' to check.
+    if (key.find('/') == std::string::npos && !accepted.count(key)) {
+      unknown += (unknown.empty() ? "" : ", ") + name;
+    }
+  }
+  if (unknown.empty()) return;
+  std::string names_accepted;
+  for (const std::string& key : accepted) {
+    names_accepted += (names_accepted.empty() ? "" : ", ") + key;
+  }
+  throw std::invalid_argument("unknown parameter(s) " + unknown +
+                              " (accepted outside sections: " + names_accepted + ")");
+}
+
 void RosParameterReader::Visit(const std::string& key, int* value) {
   Get(key, value, "a whole number");
 }

@@ -38,6 +38,12 @@ class RosParameterReader : public io::OptionVisitor {
   std::set<std::string> visited_;
 };
 
+// Throws std::invalid_argument naming every private parameter of `private_node` outside the
+// sections (a name without "/") that is not one of `accepted`, with the accepted names: a
+// misspelt "~tf_rat" must not be silently ignored any more than "~features/max_featurs".
+void RejectUnknownParameters(const ros::NodeHandle& private_node,
+                             const std::set<std::string>& accepted);
+
 // One module's options for a nodelet: its section of the YAML file in ~config_file (if set),
 // then private parameters "~<section>/<key>" over it, validated. Throws std::exception naming
 // the bad value; the nodelet reports it and refuses to start.

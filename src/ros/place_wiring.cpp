@@ -28,6 +28,8 @@ PlaceParameters ReadPlaceParameters(const ros::NodeHandle& private_node) {
   p.map_file = private_node.param<std::string>("map_file", "");
   p.save_map_at_exit = private_node.param<std::string>("save_map", "");
   p.mode = private_node.param<std::string>("mode", "mapping");
+  ros_parameters::RejectUnknownParameters(
+      private_node, {"config_file", "fabmap_config", "map_file", "mode", "save_map"});
   return p;
 }
 

@@ -69,6 +69,20 @@ TrackerParameters ReadTrackerParameters(const ros::NodeHandle& private_node) {
     throw std::invalid_argument(
         "set ~calibration_file (e.g. config/euroc_stereo.yaml) or ~use_camera_info");
   }
+  // The map's parameters are the LoopDetector's; without it (loop_closing false) they would be
+  // dropped without a word, and the user would believe the map saved or used.
+  if (!p.loop_closing && (!private_node.param<std::string>("map_file", "").empty() ||
+                          !private_node.param<std::string>("save_map", "").empty() ||
+                          private_node.param<std::string>("mode", "mapping") != "mapping")) {
+    throw std::invalid_argument(
+        "~map_file, ~save_map and ~mode localization need loop closing (the LoopDetector keeps "
+        "the map): set loop_closing true or leave them out");
+  }
+  ros_parameters::RejectUnknownParameters(
+      private_node, {"approximate_sync", "base_frame", "base_to_camera", "calibration_file",
+                     "camera_frame", "config_file", "fabmap_config", "image_transport", "lockstep",
+                     "loop_closing", "map_file", "map_frame", "mode", "odom_frame", "publish_tf",
+                     "queue_size", "save_map", "use_camera_info"});
   return p;
 }
 

@@ -25,21 +25,19 @@
 namespace stereo_fabmap_slam::test {
 namespace {
 
-TEST(Misconfiguration, MisspeltPrivateParameterEndsTheLaunchWithItsName) {
+// Runs one of this folder's launch files that must end by itself, the graph refusing to start;
+// returns its output (empty, and the test fails, if it did not end).
+std::string OutputOfARefusedLaunch(const std::string& launch_file) {
   TemporaryDirectory temp;
   // roslaunch on the rostest's master; `timeout` stops it if it does not end by itself (the
   // graph would otherwise run until killed, with no tracker).
   const std::string log = temp.path() + "/roslaunch.log";
-  const int status = std::system(("timeout 60 roslaunch " + RepositoryRoot() +
-                                  "/test/ros/misspelt_parameter.launch > " + log + " 2>&1")
+  const int status = std::system(("timeout 60 roslaunch " + RepositoryRoot() + "/test/ros/" +
+                                  launch_file + " > " + log + " 2>&1")
                                      .c_str());
   const std::string output = ReadTextFile(log);
-  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_TRUE(WIFEXITED(status)) << output;
   EXPECT_NE(WEXITSTATUS(status), 124) << "the launch kept running:\n" << output;
-  EXPECT_NE(output.find("unknown parameter(s) /stereo_tracker/features/max_featurs"),
-            std::string::npos)
-      << output;
-  EXPECT_NE(output.find("max_features"), std::string::npos) << "the accepted keys are listed";
   // Nothing of the graph is left running (the master may list a node a moment longer than
   // its process lives, so ask the processes).
   std::string processes;
@@ -47,13 +45,40 @@ TEST(Misconfiguration, MisspeltPrivateParameterEndsTheLaunchWithItsName) {
                        &processes),
             0)
       << processes;
+  return output;
+}
+
+TEST(Misconfiguration, MisspeltPrivateParameterEndsTheLaunchWithItsName) {
+  const std::string output = OutputOfARefusedLaunch("misspelt_parameter.launch");
+  EXPECT_NE(output.find("unknown parameter(s) /stereo_tracker/features/max_featurs"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("max_features"), std::string::npos) << "the accepted keys are listed";
+  ros::param::del("/stereo_tracker");  // the next launch would meet it too
+}
+
+// Outside the sections too (~tf_rate, ~rate, ~queue_size were read with a default, so a typo
+// was ignored).
+TEST(Misconfiguration, MisspeltParameterOutsideTheSectionsEndsTheLaunchWithItsName) {
+  const std::string output = OutputOfARefusedLaunch("misspelt_top_level_parameter.launch");
+  EXPECT_NE(output.find("unknown parameter(s) /stereo_tracker/queue_sise"), std::string::npos)
+      << output;
+  EXPECT_NE(output.find("queue_size"), std::string::npos) << "the accepted names are listed";
+  ros::param::del("/stereo_tracker");
+}
+
+// save_map:= (or map_file:=, mode:=localization) with loop_closing:=false: no LoopDetector runs
+// to keep the map, so the launch ends saying so instead of dropping the request.
+TEST(Misconfiguration, AMapAskedForWithoutLoopClosingEndsTheLaunchSayingWhy) {
+  const std::string output = OutputOfARefusedLaunch("map_without_loop_closing.launch");
+  EXPECT_NE(output.find("need loop closing (the LoopDetector keeps the map)"), std::string::npos)
+      << output;
+  ros::param::del("/stereo_tracker");
 }
 
 // A damaged ~map_file and ~mode:=bogus: before, the LoopDetector threw from onInit and the
 // manager died of a segmentation fault (5 of 5 tries), taking the tracker with it.
 TEST(Misconfiguration, ARefusedMapFileOrModeLeavesTheGraphRunning) {
-  // The misspelt parameter of the test before stays on the master otherwise.
-  ros::param::del("/stereo_tracker");
   TemporaryDirectory temp;
   const std::string bag = temp.path() + "/mh01.bag";
   WriteEurocSubsetBag("MH01_first10s", bag);
