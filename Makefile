@@ -121,7 +121,8 @@ test: deps $(WS)/build/Makefile
 	  echo "Waiting for the sanitizer build and its tests"; wait; true
 	@cat $(SANITIZE_TESTS_LOG)
 	rm -rf $(WS)/build/test_sequences
-	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
+	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results \
+	  --expected $(WS)/build/expected_test_results.txt
 
 # The sanitizer build: a second build folder, Debug flags with ASan and UBSan, the ROS-free part
 # only (STEREO_FABMAP_SLAM_SANITIZE in CMakeLists.txt). Its tools stay out of build/bin.

@@ -117,7 +117,8 @@ RelocalizeService::RelocalizeService(ros::NodeHandle& node, const TrackerOutputs
   ros::NodeHandle service_node(node);
   service_node.setCallbackQueue(&queue_);
   server_ = service_node.advertiseService("relocalize", &RelocalizeService::OnRelocalize, this);
-  spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
+  // Two threads: while one call waits for its frame, another is told at once that it waits.
+  spinner_ = std::make_unique<ros::AsyncSpinner>(2, &queue_);
   spinner_->start();
 }
 

@@ -67,8 +67,8 @@ class TrackerOutputs {
 };
 
 // The relocalize service's timeout [s] (0: 1 s), or nullopt for one that is not a number of
-// seconds in [0, 60]: the service thread is one, and a caller waiting an hour for images that
-// never come would hold it from everyone else.
+// seconds in [0, 60]: one call waits at a time, and a caller waiting an hour for images that
+// never come would hold the service from everyone else.
 std::optional<double> RelocalizeTimeout(double requested);
 
 // The relocalize service: on a queue and thread of its own (a call waits for the next frame,

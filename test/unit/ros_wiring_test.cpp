@@ -1,0 +1,101 @@
+// The nodelets' plumbing without a ROS graph: the bounded queue between the image callbacks and
+// the tracking thread accounts for every pair (tracked, refused or skipped), the LoopDetector's
+// pairing of keyframes with the Backend's answers in either order, and the relocalize service's
+// timeout.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+#include <boost/make_shared.hpp>
+
+#include "place_wiring.h"
+#include "tracker_outputs.h"
+#include "tracker_wiring.h"
+
+namespace stereo_fabmap_slam::test {
+namespace {
+
+sensor_msgs::ImageConstPtr ImageAt(double seconds) {
+  auto image = boost::make_shared<sensor_msgs::Image>();
+  image->header.stamp.fromSec(seconds);
+  return image;
+}
+
+TEST(PairQueue, EveryPairReceivedIsCountedEvenBeforeTheCalibration) {
+  pipeline::InputMonitor monitor{pipeline::InputMonitorOptions()};  // no calibration yet
+  ros_wiring::PairQueue queue;
+  queue.Configure(/*capacity=*/4, /*catch_up_gap=*/0.0, &monitor);
+  // Ten pairs at 20 Hz while the tracker takes none: four wait, six are dropped (and counted).
+  for (int i = 0; i < 10; ++i) queue.Push(ImageAt(0.05 * i), ImageAt(0.05 * i));
+  EXPECT_EQ(monitor.counts().received, 10u);
+  EXPECT_EQ(monitor.counts().skipped, 6u);
+  std::vector<pipeline::InputEvent> events;
+  const std::optional<ros_wiring::ImagePair> first = queue.Take(&events);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_EQ(first->arrival, 1u) << "the first pair is taken as it comes";
+  // The rest of the backlog: the queue passes over what it must to keep the gaps even; every
+  // pair it passes over is counted.
+  std::uint64_t taken = 1;
+  while (monitor.counts().skipped + taken < 10) {
+    ASSERT_TRUE(queue.Take(&events).has_value());
+    ++taken;
+  }
+  EXPECT_EQ(taken + monitor.counts().skipped, monitor.counts().received);
+  queue.Stop();
+  EXPECT_FALSE(queue.Take(&events).has_value()) << "stopping ends the wait";
+}
+
+stereo_fabmap_slam::KeyframeConstPtr KeyframeMessage(std::uint64_t id) {
+  auto keyframe = boost::make_shared<stereo_fabmap_slam::Keyframe>();
+  keyframe->id = id;
+  return keyframe;
+}
+
+stereo_fabmap_slam::KeyframeUpdateConstPtr UpdateMessage(std::uint64_t id) {
+  auto update = boost::make_shared<stereo_fabmap_slam::KeyframeUpdate>();
+  update->keyframe_id = id;
+  return update;
+}
+
+TEST(KeyframePairing, EachKeyframeMeetsItsAnswerInEitherOrder) {
+  ros_wiring::KeyframePairing pairing;
+  pairing.AddKeyframe(KeyframeMessage(0));  // keyframe first
+  pairing.AddUpdate(UpdateMessage(0));
+  pairing.AddUpdate(UpdateMessage(1));  // answer first
+  pairing.AddKeyframe(KeyframeMessage(1));
+  for (std::uint64_t id = 0; id < 2; ++id) {
+    const std::optional<ros_wiring::KeyframePairing::Pair> pair = pairing.Take();
+    ASSERT_TRUE(pair.has_value());
+    ASSERT_TRUE(pair->keyframe);
+    EXPECT_EQ(pair->keyframe->id, id);
+    EXPECT_EQ(pair->update->keyframe_id, id);
+  }
+  // Keyframe 2 never answered (no Backend then), 4's answer without its keyframe (this nodelet
+  // was not running): 3 is paired, 2 dropped; 4 is handed over alone once a later keyframe came.
+  pairing.AddKeyframe(KeyframeMessage(2));
+  pairing.AddUpdate(UpdateMessage(4));
+  pairing.AddKeyframe(KeyframeMessage(5));
+  const std::optional<ros_wiring::KeyframePairing::Pair> alone = pairing.Take();
+  ASSERT_TRUE(alone.has_value());
+  EXPECT_FALSE(alone->keyframe) << "its keyframe never came";
+  EXPECT_EQ(alone->update->keyframe_id, 4u);
+  pairing.AddUpdate(UpdateMessage(5));
+  const std::optional<ros_wiring::KeyframePairing::Pair> next = pairing.Take();
+  ASSERT_TRUE(next.has_value() && next->keyframe);
+  EXPECT_EQ(next->keyframe->id, 5u) << "keyframe 2, never answered, was dropped";
+  pairing.Stop();
+  EXPECT_FALSE(pairing.Take().has_value());
+}
+
+TEST(RelocalizeTimeout, ANumberOfSecondsUpToAMinuteOrARefusal) {
+  EXPECT_EQ(ros_wiring::RelocalizeTimeout(0.0), 1.0) << "0: the default second";
+  EXPECT_EQ(ros_wiring::RelocalizeTimeout(2.5), 2.5);
+  EXPECT_EQ(ros_wiring::RelocalizeTimeout(60.0), 60.0);
+  for (const double refused : {-1.0, 60.5, 3600.0, std::numeric_limits<double>::quiet_NaN(),
+                               std::numeric_limits<double>::infinity()}) {
+    EXPECT_FALSE(ros_wiring::RelocalizeTimeout(refused).has_value()) << refused;
+  }
+}
+
+}  // namespace
+}  // namespace stereo_fabmap_slam::test
