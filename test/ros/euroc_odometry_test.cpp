@@ -213,6 +213,9 @@ TEST_F(EurocOdometry, CalibrationFromTheBagsCameraInfo) {
     skipped = std::stoul(log.substr(start, reported - start));
   }
   RecordProperty("pairs_skipped", static_cast<int>(skipped));
+  // camera_info says nothing of where the camera sits: the user hears that base_link is the
+  // camera (not REP-103's x forward, z up) and how to say otherwise.
+  EXPECT_NE(log.find("use_camera_info without ~base_to_camera"), std::string::npos) << log;
   EXPECT_LE(skipped, 10u) << log;  // 5 %: a tracker that keeps up at 1x
   // The calibration is made within a frame or two of the first camera_info (rectification maps:
   // tens of milliseconds); 5 % allows for a loaded machine.

@@ -126,7 +126,9 @@ TEST(PnpStudy, TooFewMatchesFailEveryKernel) {
   for (const PnpTrial& trial : trials) {
     // Exact, but below the 20 inliers a relocalization would need.
     EXPECT_FALSE(trial.success);
-    EXPECT_GT(trial.time_ms, 0.0);
+    // RANSAC between two readings; a failed estimate is not refined, so the refined trial
+    // costs the same.
+    EXPECT_DOUBLE_EQ(trial.time_ms, 1.0);
   }
 }
 

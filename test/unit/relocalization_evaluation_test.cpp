@@ -105,8 +105,6 @@ TEST(RelocalizationEvaluation, ToolOnRenderedRouteRelocalizesMostRelevantFrames)
   }
   EXPECT_EQ(JsonNumber(output, "test_frames"), 60);  // 120 frames after 10 s, one in two
   EXPECT_GT(JsonNumber(output, "relevant_frames"), 0);
-  EXPECT_GE(JsonNumber(output, "recall"), 0.0);
-  EXPECT_LE(JsonNumber(output, "recall"), 1.0);
   // The target on a rendered route; measured 1.0 on 34 s of the loop mapped to 26 s.
   EXPECT_GE(JsonNumber(output, "recall"), 0.8);
   EXPECT_EQ(ReadTextFile(temp.path() + "/evaluation/frames.csv").rfind("time,mapping,x,y,z,", 0),
