@@ -337,6 +337,7 @@ TEST_F(BadInputTest, GapIsNamedAndTrackedAcross) {
 // the earlier stamps. 50 s below the stream's first stamp: below every stamp sent, whichever
 // tests ran before, and more than all the tests send after it.
 TEST_F(BadInputTest, TimeGoingBackwardsResetsAndTrackingGoesOn) {
+  EXPECT_TRUE(TrackRealFrames(2)) << "frames to go back from, whichever tests ran before";
   graph_->next_stamp = graph_->first_stamp - 1000 * kStep;
   EXPECT_TRUE(TrackRealFrames(3)) << "tracking must resume after time went backwards";
   EXPECT_TRUE(Logged("time went backwards")) << "the reset is named";
