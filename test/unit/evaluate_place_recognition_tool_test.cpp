@@ -200,16 +200,18 @@ TEST_F(RenderedTwice, ImageFolderWithMatrixFindsEveryRevisit) {
   EXPECT_NE(output.find("2 x 2 matrix for 80 images"), std::string::npos) << output;
 }
 
-// The figures reported for issue 10 on real data: MH01's first 10 s (200 frames, 83 queries
-// with a true match outside the 5 s window). At 100 % precision FAB-MAP with one place per
-// image (what the SLAM map keeps) recalls 61.4 % (51 queries), with places updated on revisits
-// 92.8 % (77), tf-idf over the same words 56.6 % (47); before the log-odds ranking, the trained
-// detector model and spread corners the first two were 0 % and 16.9 % (68.7 and 94.0 % with the
-// observation model's marginal on the wrong side, before 2026-11-25). The run is
-// deterministic, so the margin is for deliberate changes to features or FAB-MAP, not noise:
-// 5 queries (6 %) may be lost before the test asks for a look; fewer would flag every small
-// reordering of the top answers, which decides this statistic. FAB-MAP must stay at least as
-// good as tf-idf, and updated places declare no false match at the default threshold.
+// Place recognition on real data: MH01's first 10 s (200 frames, 83 queries with a true match
+// outside the 5 s window). The bounds hold for the property, not for one vocabulary: they are
+// derived from four vocabularies trained as `make` trains the default, with the k-means seeds
+// 1 (shipped), 2, 3 and 4 of config/fabmap.yaml (docs/benchmarks.md):
+// - places updated on revisits (FabMap::Add) declare no false match at the default threshold
+//   (precision 1 with all four), recall 82-98 % of the queries at 100 % precision (92.8 % with
+//   the shipped seed) and beat tf-idf over the same words (29-57 %): at least 75 %, which is 5
+//   queries below the lowest;
+// - one place per image (what the SLAM map keeps) ranks true matches above false ones: area
+//   under the precision-recall curve 0.80-0.89, at least 0.75. Its recall at 100 % precision
+//   swings with the vocabulary (7, 13, 30 and 61 %: one confident false match decides it) and
+//   is recorded, not bounded.
 TEST(EvaluatePlaceRecognitionTool, Mh01RecallAtFullPrecision) {
   TemporaryDirectory temp;
   std::string output;
@@ -223,18 +225,19 @@ TEST(EvaluatePlaceRecognitionTool, Mh01RecallAtFullPrecision) {
   RecordProperty("summary", ReadTextFile(temp.path() + "/place_recognition_summary.csv"));
   EXPECT_GT(Value(summary, "fabmap/update", "queries_with_true_match"), 50);
   EXPECT_GT(Value(summary, "fabmap/update", "excluded_pairs"), 0);
-  const double per_image = Value(summary, "fabmap/per-image", "recall_at_100_precision");
-  EXPECT_GE(per_image, 0.614 - 0.06);
-  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"), 0.928 - 0.06);
-  EXPECT_GE(per_image, Value(summary, "tfidf/per-image", "recall_at_100_precision"));
+  const double updated = Value(summary, "fabmap/update", "recall_at_100_precision");
+  EXPECT_GE(updated, 0.75);
+  EXPECT_GE(updated, Value(summary, "tfidf/per-image", "recall_at_100_precision"));
   EXPECT_EQ(Value(summary, "fabmap/update", "precision_at_default"), 1.0);
+  EXPECT_GE(Value(summary, "fabmap/per-image", "auc"), 0.75);
 }
 
 // Perceptual aliasing: the rendered hall hangs the same photographs on several walls, and the
 // figure eight (40 s, seed 2: 455 queries with a true match) sees them from places 5-11 m
 // apart. With places updated on revisits, no match FAB-MAP declares at the default threshold
-// (fabmap.match_log_odds) may be false; it declared 115, recall 25.3 %, and may lose 6 % of the
-// queries with a true match, as above, before the test asks for a look.
+// (fabmap.match_log_odds) may be false. With the four vocabularies above: precision 1 with each,
+// recall at the default 21.3-27.0 % (25.3 % shipped), at 100 % precision 28.6-29.5 % against
+// tf-idf's 0.7-4.0 %. At least 15 % at the default: 27 queries below the lowest.
 TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefaultThreshold) {
   TemporaryDirectory temp;
   std::string output;
@@ -252,7 +255,7 @@ TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefau
   RecordProperty("summary", ReadTextFile(temp.path() + "/place_recognition_summary.csv"));
   EXPECT_GT(Value(summary, "fabmap/update", "queries_with_true_match"), 400);
   EXPECT_EQ(Value(summary, "fabmap/update", "precision_at_default"), 1.0);
-  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_default"), 0.253 - 0.06);
+  EXPECT_GE(Value(summary, "fabmap/update", "recall_at_default"), 0.15);
   EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"),
             Value(summary, "tfidf/per-image", "recall_at_100_precision"));
 }
