@@ -3,8 +3,9 @@
 # under a virtual X server, and saves a screenshot of rviz once the bag has ended: what a user
 # sees before installing (docs/ and the README show these).
 #   scripts/rviz_screenshot.sh BAG OUT.png [CALIBRATION.yaml] [roslaunch arg:=value ...]
-# RVIZ_VIEW="DISTANCE X Y" moves the shipped config's orbit view (distance [m], focal point in
-# the map frame [m]) for a scene of another size; everything else stays as shipped.
+# RVIZ_VIEW="DISTANCE X Y [FRAME]" moves the shipped config's orbit view (distance [m], focal
+# point [m] in FRAME, by default the shipped one, base_link: the view follows the camera), e.g.
+# "19 2 3 map" for an overview of a whole route; everything else stays as shipped.
 # Needs `make build` and the packages rviz, xvfb and imagemagick (`make screenshots` installs
 # them and makes the pictures in docs/).
 set -euo pipefail
@@ -44,13 +45,16 @@ start_private_master "$log_dir"
 
 config=$PWD/config/stereo_fabmap_slam.rviz
 if [ -n "${RVIZ_VIEW:-}" ]; then
-  read -r distance focal_x focal_y <<< "$RVIZ_VIEW"
-  /usr/bin/python3 - "$config" "$log_dir/view.rviz" "$distance" "$focal_x" "$focal_y" <<'PYTHON'
+  read -r distance focal_x focal_y frame <<< "$RVIZ_VIEW"
+  /usr/bin/python3 - "$config" "$log_dir/view.rviz" "$distance" "$focal_x" "$focal_y" \
+    "${frame:-}" <<'PYTHON'
 import re, sys
 text = open(sys.argv[1]).read()
 text = re.sub(r"(\n      Distance: )[0-9.]+", r"\g<1>" + sys.argv[3], text)
 text = re.sub(r"(Focal Point:\n        X: )[-0-9.]+(\n        Y: )[-0-9.]+",
               r"\g<1>" + sys.argv[4] + r"\g<2>" + sys.argv[5], text)
+if sys.argv[6]:
+    text = re.sub(r"(\n      Target Frame: )\S+", r"\g<1>" + sys.argv[6], text)
 open(sys.argv[2], "w").write(text)
 PYTHON
   config=$log_dir/view.rviz
