@@ -236,9 +236,21 @@ void CheckBothDrivers(const Sequence& sequence, const std::string& folder, bool 
   EXPECT_GT(JsonNumber(localized, "relocalizations"), 0);
   EXPECT_GE(JsonNumber(localized, "trajectory_frames"), 0.9 * JsonNumber(localized, "frames"));
   RunGraph(sequence, folder + "/graph_in_offline_map",
-           "map_file:=" + folder + "/offline.map mode:=localization");
+           "map_file:=" + folder + "/offline.map mode:=localization", folder + "/localized.bag");
   const std::string graph_localized = ReadTextFile(folder + "/graph_in_offline_map/summary.json");
   EXPECT_GT(JsonNumber(graph_localized, "relocalizations"), 0);
+  // A recording in localization mode becomes the same files too (trajectory.txt: map -> odom
+  // composed per frame with the correction in force at that frame).
+  ASSERT_EQ(RunCommand(std::string(BAG_TO_RUN_BIN) + " " + folder + "/localized.bag --output " +
+                           folder + "/localized_from_bag 2>&1",
+                       &log),
+            0)
+      << log;
+  for (const char* file : {"trajectory.txt", "odometry.txt", "keyframes.txt"}) {
+    EXPECT_EQ(ReadTextFile(folder + "/localized_from_bag/" + file),
+              ReadTextFile(folder + "/graph_in_offline_map/" + file))
+        << file;
+  }
   // The same localization from both drivers: map -> odom per frame from the same
   // relocalizations (trajectory.txt holds T_map_camera of each frame in localization mode).
   EXPECT_LT(RmsDifference(folder + "/offline_in_graph_map/trajectory.txt",
