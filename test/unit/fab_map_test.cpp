@@ -94,7 +94,35 @@ TEST(ChowLiuTree, RecoversTheTreeSamplesWereDrawnFrom) {
 // A small model: 6 words, 60 training images drawn from a known tree.
 ChowLiuTree ToyTree() { return ChowLiuTree::Train(SampleTree({-1, 0, 0, 1, 2, 2}, 60, 5), 6); }
 
-// log p(Z | place) straight from the paper's formulas, one word at a time.
+// p(z_q = z | e_q = e, z_p = zp) from the model's one assumption, not from its closed form: the
+// reading z of word q depends on the scene element e and on its parent word's reading z_p, and
+// e and z_p are independent given z (Cummins & Newman 2008). So the joint is
+// p(z, e, z_p) = p(z) p(e | z) p(z_p | z), with p(e | z) and p(z_p | z) turned around by Bayes
+// from what the model gives (the detector model p(z | e), the tree's p(z | z_p)), and the
+// conditional is that joint normalised over z. The priors of e and z_p this needs cancel:
+// `prior_e` and `prior_parent` may be anything in (0, 1).
+double ZGivenElementAndParent(const ChowLiuTree& tree, const FabMapOptions& o, int q, bool z,
+                              bool e, bool zp, double prior_e, double prior_parent) {
+  const auto p_z = [&](bool reading) { return reading ? tree.Marginal(q) : 1 - tree.Marginal(q); };
+  const auto p_z_given_e = [&](bool reading, bool element) {
+    const double seen = element ? o.p_z_given_e : o.p_z_given_not_e;
+    return reading ? seen : 1 - seen;
+  };
+  const auto p_e_given_z = [&](bool element, bool reading) {
+    return p_z_given_e(reading, element) * (element ? prior_e : 1 - prior_e) / p_z(reading);
+  };
+  const auto p_parent_given_z = [&](bool parent, bool reading) {
+    return tree.Conditional(q, reading, parent) * (parent ? prior_parent : 1 - prior_parent) /
+           p_z(reading);
+  };
+  const auto joint = [&](bool reading) {
+    return p_z(reading) * p_e_given_z(e, reading) * p_parent_given_z(zp, reading);
+  };
+  return joint(z) / (joint(true) + joint(false));
+}
+
+// log p(Z | place) from the model, one word at a time: each word's reading given its parent's,
+// summed over whether the place has the element (probability theta).
 double HandLogLikelihood(const ChowLiuTree& tree, const FabMapOptions& o,
                          const std::vector<int>& query, const std::vector<double>& theta) {
   double log_likelihood = 0;
@@ -104,20 +132,28 @@ double HandLogLikelihood(const ChowLiuTree& tree, const FabMapOptions& o,
         tree.parent(q) >= 0 && std::count(query.begin(), query.end(), tree.parent(q)) > 0;
     double p = 0;
     for (const bool e : {false, true}) {
-      const double marginal = tree.Marginal(q);
-      const auto detect = [&](bool seen) {
-        return seen ? (e ? o.p_z_given_e : o.p_z_given_not_e)
-                    : 1 - (e ? o.p_z_given_e : o.p_z_given_not_e);
-      };
-      // Cummins & Newman 2008: p(z | e, z_p) = beta / (alpha + beta), with
-      // beta = p(not z) p(z | e) p(z | z_p) and alpha = p(z) p(not z | e) p(not z | z_p).
-      const double beta = (z ? 1 - marginal : marginal) * detect(z) * tree.Conditional(q, z, zp);
-      const double alpha = (z ? marginal : 1 - marginal) * detect(!z) * tree.Conditional(q, !z, zp);
-      p += beta / (alpha + beta) * (e ? theta[q] : 1 - theta[q]);
+      p += ZGivenElementAndParent(tree, o, q, z, e, zp, 0.3, 0.6) * (e ? theta[q] : 1 - theta[q]);
     }
     log_likelihood += std::log(p);
   }
   return log_likelihood;
+}
+
+// The derivation above needs priors of e and z_p that the model does not have; they must cancel.
+TEST(FabMapModel, TheConditionalOfAReadingIsTheSameWhateverThePriorsThatCancel) {
+  const ChowLiuTree tree = ToyTree();
+  const FabMapOptions options;
+  for (int q = 0; q < tree.size(); ++q) {
+    for (const bool z : {false, true}) {
+      for (const bool e : {false, true}) {
+        for (const bool zp : {false, true}) {
+          const double reference = ZGivenElementAndParent(tree, options, q, z, e, zp, 0.3, 0.6);
+          EXPECT_NEAR(ZGivenElementAndParent(tree, options, q, z, e, zp, 0.9, 0.05), reference,
+                      1e-12);
+        }
+      }
+    }
+  }
 }
 
 // p(e = 1 | place seen once, showing `words`), by Bayes on the detector model.
