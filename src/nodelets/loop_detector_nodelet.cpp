@@ -35,22 +35,18 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
     pairing_.Stop();
     if (worker_.joinable()) worker_.join();
     if (parameters_.save_map_at_exit.empty() || !places_) return;
-    const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
     std::lock_guard<std::mutex> lock(mutex_);  // a service call may still be answered
-    ROS_INFO_STREAM("[loop_detector] ~save_map "
-                    << parameters_.save_map_at_exit << ": "
-                    << places_->SaveMap(parameters_.save_map_at_exit, *map).message);
+    ROS_INFO_STREAM(
+        "[loop_detector] ~save_map "
+        << parameters_.save_map_at_exit << ": "
+        << places_->SaveMap(parameters_.save_map_at_exit, *places_->followed_map()).message);
   }
 
  private:
   void onInit() override;
   void Work();
-  void Announce(const pipeline::LoadedMapFile& file);  // the map until the Backend's graph
+  void Announce(const pipeline::LoadedMapFile& file);
   void Announce(pipeline::SlamMode mode);
-  std::shared_ptr<const pipeline::MapSnapshot> Map() {
-    std::lock_guard<std::mutex> lock(map_mutex_);
-    return map_;
-  }
   bool OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& request,
                     stereo_fabmap_slam::DetectLoop::Response& response);
   bool OnRelocalizeFrame(stereo_fabmap_slam::RelocalizeFrame::Request& request,
@@ -61,20 +57,16 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
                  stereo_fabmap_slam::MapFile::Response& response);
   bool OnSetMode(stereo_fabmap_slam::SetMode::Request& request,
                  stereo_fabmap_slam::SetMode::Response& response) {
-    const std::optional<pipeline::SlamMode> mode = pipeline::ParseSlamMode(request.mode);
-    if (mode) Announce(*mode);
-    response.success = mode.has_value();
-    response.message = response.success
-                           ? "mode " + request.mode
-                           : "unknown mode '" + request.mode + "' (mapping, localization)";
+    const pipeline::ModeAnswer answer = pipeline::ModeNamed(request.mode);
+    if (answer.mode) Announce(*answer.mode);
+    response.success = answer.mode.has_value();
+    response.message = answer.message;
     return true;
   }
 
   ros_wiring::PlaceParameters parameters_;
   std::mutex mutex_;  // the service: the worker and the services share it
-  std::optional<pipeline::PlaceService> places_;
-  std::mutex map_mutex_;
-  std::shared_ptr<const pipeline::MapSnapshot> map_ = std::make_shared<pipeline::MapSnapshot>();
+  std::optional<pipeline::PlaceService> places_;  // made before any callback can run
   ros_wiring::KeyframePairing pairing_;
   std::thread worker_;
   ros::Subscriber keyframe_subscriber_, update_subscriber_, graph_subscriber_;
@@ -124,10 +116,8 @@ void LoopDetectorNodelet::onInit() {
   relocalize_spinner_->start();
   graph_subscriber_ = node.subscribe<stereo_fabmap_slam::MapGraph>(
       "map_graph", 1, [this](const stereo_fabmap_slam::MapGraphConstPtr& graph) {
-        auto map =
-            std::make_shared<pipeline::MapSnapshot>(ros_conversions::FromMapGraphMessage(*graph));
-        std::lock_guard<std::mutex> lock(map_mutex_);
-        map_ = std::move(map);
+        places_->FollowMap(
+            std::make_shared<pipeline::MapSnapshot>(ros_conversions::FromMapGraphMessage(*graph)));
       });
   worker_ = std::thread(&LoopDetectorNodelet::Work, this);
   keyframe_subscriber_ = node.subscribe<stereo_fabmap_slam::Keyframe>(
@@ -140,24 +130,19 @@ void LoopDetectorNodelet::onInit() {
 
 void LoopDetectorNodelet::Work() {
   while (std::optional<ros_wiring::KeyframePairing::Pair> pair = pairing_.Take()) {
-    if (!pair->keyframe) {
-      NODELET_WARN(
-          "keyframe %lu joined the map, but its keyframe message never arrived "
-          "(restarted while the tracker ran?): it is no place",
-          static_cast<unsigned long>(pair->update->keyframe_id));
-      continue;
-    }
     try {
+      const pipeline::MappedKeyframe mapped =
+          ros_conversions::FromMappedKeyframeMessage(*pair->update);
       std::lock_guard<std::mutex> lock(mutex_);
       const pipeline::PlaceService::KeyframeOutcome outcome =
-          places_->Take(ros_conversions::FromKeyframeMessage(*pair->keyframe),
-                        ros_conversions::CameraOfKeyframe(*pair->keyframe),
-                        ros_conversions::FromMappedKeyframeMessage(*pair->update));
+          pair->keyframe ? places_->Take(ros_conversions::FromKeyframeMessage(*pair->keyframe),
+                                         ros_conversions::CameraOfKeyframe(*pair->keyframe), mapped)
+                         : places_->Take(mapped);
       for (const std::string& warning : outcome.warnings) NODELET_WARN("%s", warning.c_str());
       if (!outcome.result) continue;
       const pipeline::PlaceResult& result = *outcome.result;
       stereo_fabmap_slam::PlaceResult message = ros_conversions::ToPlaceResultMessage(result);
-      message.header.frame_id = pair->keyframe->header.frame_id;
+      message.header.frame_id = pair->keyframe->header.frame_id;  // a place has its keyframe
       place_publisher_.publish(message);
       if (const auto& loop = result.detection.loop) {
         NODELET_INFO("loop: keyframe %ld -> %ld, %d inliers, p = %.2f",
@@ -166,17 +151,12 @@ void LoopDetectorNodelet::Work() {
       }
     } catch (const std::exception& error) {
       NODELET_WARN_THROTTLE(5, "keyframe %lu not detected: %s",
-                            static_cast<unsigned long>(pair->keyframe->id), error.what());
+                            static_cast<unsigned long>(pair->update->keyframe_id), error.what());
     }
   }
 }
 
 void LoopDetectorNodelet::Announce(const pipeline::LoadedMapFile& file) {
-  auto map = std::make_shared<pipeline::MapSnapshot>(file.map);
-  {
-    std::lock_guard<std::mutex> lock(map_mutex_);
-    map_ = std::move(map);
-  }
   loaded_publisher_.publish(ros_conversions::ToMapLoadedMessage(file.path, file.loaded));
   NODELET_INFO("map %s loaded: %zu keyframes", file.path.c_str(), file.loaded.keyframes);
 }
@@ -210,12 +190,11 @@ bool LoopDetectorNodelet::OnDetectLoop(stereo_fabmap_slam::DetectLoop::Request& 
 bool LoopDetectorNodelet::OnRelocalizeFrame(
     stereo_fabmap_slam::RelocalizeFrame::Request& request,
     stereo_fabmap_slam::RelocalizeFrame::Response& response) {
-  const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
   std::lock_guard<std::mutex> lock(mutex_);
   response.keyframe_id = -1;
   try {
-    const pipeline::RelocalizationAnswer answer =
-        places_->Relocalize(ros_conversions::FromRelocalizeFrameRequest(request), *map);
+    const pipeline::RelocalizationAnswer answer = places_->Relocalize(
+        ros_conversions::FromRelocalizeFrameRequest(request), *places_->followed_map());
     response = ros_conversions::ToRelocalizeFrameResponse(answer);
     if (answer.edge) {
       stereo_fabmap_slam::LoopEdge edge = response.edge;
@@ -235,9 +214,9 @@ bool LoopDetectorNodelet::OnRelocalizeFrame(
 
 bool LoopDetectorNodelet::OnSaveMap(stereo_fabmap_slam::MapFile::Request& request,
                                     stereo_fabmap_slam::MapFile::Response& response) {
-  const std::shared_ptr<const pipeline::MapSnapshot> map = Map();
   std::lock_guard<std::mutex> lock(mutex_);
-  ros_wiring::FillMapFileResponse(places_->SaveMap(request.path, *map), &response);
+  ros_wiring::FillMapFileResponse(places_->SaveMap(request.path, *places_->followed_map()),
+                                  &response);
   return true;
 }
 

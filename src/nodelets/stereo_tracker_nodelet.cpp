@@ -18,7 +18,6 @@
 
 #include "ros_conversions.h"
 #include "stage_conversions.h"
-#include "stereo_fabmap_slam/pipeline/run_record.h"
 #include "stereo_fabmap_slam/pipeline/tracking_stage.h"
 #include "stereo_image_input.h"
 #include "tracker_outputs.h"
@@ -40,9 +39,10 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   void Calibrate(const ros_input::MountedRig& rig);  // once; call with mutex_
   void Work();
   void ProcessPair(const ros_wiring::ImagePair& pair);
-  // Asks the LoopDetector (relocalize_frame) and hands the answer to the stage. Call with mutex_.
-  void Relocalize(const ros::Time& stamp, const pipeline::RelocalizationRequest& request,
-                  pipeline::FrameRecord* record);
+  // Asks the LoopDetector (relocalize_frame), hands the answer to the stage and returns it (none:
+  // the service could not be called). Call with mutex_.
+  std::optional<pipeline::RelocalizationAnswer> Relocalize(
+      const ros::Time& stamp, const pipeline::RelocalizationRequest& request);
   // The relocalize service's answer, handed over without the stage's lock.
   void AnswerUser(const pipeline::UserRelocalization& answer) {
     if (relocalize_service_) relocalize_service_->Answer(answer);
@@ -56,8 +56,7 @@ class StereoTrackerNodelet : public nodelet::Nodelet {
   std::mutex mutex_;  // the stage: the worker, the update, mode and map callbacks share it
   std::unique_ptr<pipeline::TrackingStage> stage_;  // calibrated at start or by camera_info
   ros_wiring::PairQueue pairs_;
-  ros_wiring::MappingProgress mapping_;     // map_graph, updates: the snapshot and lockstep's cue
-  std::uint64_t relocalization_edges_ = 0;  // edges its relocalizations added (worker only)
+  ros_wiring::MappingProgress mapping_;  // map_graph, updates: the snapshot and lockstep's cue
   std::thread worker_;
   std::unique_ptr<ros_input::StereoImageInput> input_;
   ros::Subscriber update_subscriber_, graph_subscriber_, mode_subscriber_, loaded_subscriber_;
@@ -191,18 +190,12 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
   const double seconds = ros_conversions::ToSeconds(stamp);
   std::unique_lock<std::mutex> lock(mutex_);
   pipeline::TrackingOutput output;
-  std::string refusal;
   try {
-    if (const std::optional<pipeline::StereoPair> stereo =
-            ros_wiring::StereoPairOf(pair, &refusal)) {
-      output = stage_->Process(*stereo, mapping_.Snapshot().get());
-    }
+    std::string refusal;
+    const std::optional<pipeline::StereoPair> stereo = ros_wiring::StereoPairOf(pair, &refusal);
+    output = stereo ? stage_->Process(*stereo, mapping_.Snapshot().get()) : stage_->Refuse(refusal);
   } catch (const std::exception& error) {
-    refusal = std::string("frame skipped: ") + error.what();
-  }
-  if (!refusal.empty()) {
-    Log({pipeline::InputEvent::Kind::kUnreadable, refusal + "; frame skipped", true, true});
-    stage_->input().CountRefused();
+    output = stage_->Refuse(std::string("tracking failed: ") + error.what());
   }
   for (const pipeline::InputEvent& event : output.events) Log(event);
   if (!output.tracked) {  // said on tracked_frames too: every pair taken gets its message
@@ -213,10 +206,10 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
   news_.Report(output.tracking, &event_log_);
   outputs_->PublishTracking(stamp, output, stage_->camera(),
                             stage_->front_end().last_rectified_left());
-  pipeline::FrameRecord record = pipeline::RecordOf(output, seconds);
-  if (output.relocalization) Relocalize(stamp, *output.relocalization, &record);
-  record.on_map = stage_->on_map();
-  record.T_map_camera = stage_->T_map_camera();
+  const std::optional<pipeline::RelocalizationAnswer> answer =
+      output.relocalization ? Relocalize(stamp, *output.relocalization) : std::nullopt;
+  const pipeline::FrameRecord record =
+      stage_->RecordFrame(output, seconds, answer ? &*answer : nullptr);
   const pipeline::InputCounts counts = stage_->input().counts();
   lock.unlock();
   if (output.user) AnswerUser(*output.user);  // a frame without a pose: why
@@ -224,8 +217,7 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
   // them.
   const std::int64_t keyframe = output.tracking.keyframe ? output.tracking.keyframe->id : -1;
   if (parameters_.lockstep &&
-      !mapping_.WaitFor(keyframe, parameters_.loop_closing, relocalization_edges_,
-                        parameters_.lockstep_timeout)) {
+      !mapping_.WaitFor(keyframe, parameters_.loop_closing, parameters_.lockstep_timeout)) {
     NODELET_WARN(
         "lockstep: no answer from the Backend or LoopDetector within %.0f s for the "
         "pair at %.3f; going on",
@@ -235,25 +227,23 @@ void StereoTrackerNodelet::ProcessPair(const ros_wiring::ImagePair& pair) {
       stamp, ros_conversions::ToTrackedFrameMessage(record, counts, parameters_.frames.odom));
 }
 
-void StereoTrackerNodelet::Relocalize(const ros::Time& stamp,
-                                      const pipeline::RelocalizationRequest& request,
-                                      pipeline::FrameRecord* record) {
-  const std::optional<pipeline::RelocalizationAnswer> found =
+std::optional<pipeline::RelocalizationAnswer> StereoTrackerNodelet::Relocalize(
+    const ros::Time& stamp, const pipeline::RelocalizationRequest& request) {
+  const std::optional<pipeline::RelocalizationAnswer> answer =
       relocalize_frame_ ? relocalize_frame_->Call(request, stage_->camera(), stamp) : std::nullopt;
-  if (!found) {
+  if (!answer) {
     const std::string reason = "the LoopDetector's relocalize_frame service is not available";
     NODELET_WARN_THROTTLE(5, "relocalization: %s", reason.c_str());
     const pipeline::RelocalizationOutcome outcome = stage_->OnNoRelocalization(request, reason);
     if (outcome.user) AnswerUser(*outcome.user);
-    return;
+    return std::nullopt;
   }
-  const pipeline::RelocalizationAnswer& answer = *found;
-  relocalization_edges_ += answer.edge ? 1 : 0;
-  const pipeline::RelocalizationOutcome outcome = stage_->OnRelocalization(request, answer);
-  pipeline::RecordRelocalization(answer, record);
+  if (answer->edge) mapping_.OnRelocalizationEdgeSent();
+  const pipeline::RelocalizationOutcome outcome = stage_->OnRelocalization(request, *answer);
   if (!outcome.news.empty()) NODELET_INFO("%s", outcome.news.c_str());
   if (outcome.T_map_odom) outputs_->PublishCorrection(stamp, *outcome.T_map_odom);
   if (outcome.user) AnswerUser(*outcome.user);
+  return answer;
 }
 
 }  // namespace stereo_fabmap_slam

@@ -25,6 +25,21 @@ std::string WholePath(const std::string& path) {
 
 }  // namespace
 
+ModeAnswer ModeNamed(const std::string& name) {
+  ModeAnswer answer;
+  answer.mode = ParseSlamMode(name);
+  answer.message =
+      answer.mode ? "mode " + name : "unknown mode '" + name + "' (mapping, localization)";
+  return answer;
+}
+
+PlaceService::PlaceService(PlaceStage stage, const geometry::StereoCamera& camera)
+    : make_stage_([](const geometry::StereoCamera&) -> PlaceStage {
+        throw std::logic_error("PlaceService: its stage was made with it");
+      }),
+      stage_(std::move(stage)),
+      camera_(camera) {}
+
 PlaceService::StartUp PlaceService::Start(const std::string& mode_name,
                                           const std::string& map_file) {
   StartUp start;
@@ -68,6 +83,14 @@ PlaceService::KeyframeOutcome PlaceService::Take(const map::Keyframe& keyframe,
   PlaceStage& stage = StageFor(camera);
   stage.AddKeyframe(keyframe, mapped);
   if (mapped.in_map_graph) outcome.result = stage.DetectLoop(mapped.keyframe_id);
+  return outcome;
+}
+
+PlaceService::KeyframeOutcome PlaceService::Take(const MappedKeyframe& mapped) {
+  KeyframeOutcome outcome;
+  outcome.warnings.push_back("keyframe " + std::to_string(mapped.keyframe_id) +
+                             " joined the map, but its keyframe message never arrived (restarted "
+                             "while the tracker ran?): it is no place");
   return outcome;
 }
 
@@ -133,7 +156,8 @@ LoadedMapFile PlaceService::Load(const std::string& path) {
     // A service without a stage takes the map's camera; the mapping stage then refuses
     // keyframes of another.
     const LoadedMap loaded = StageFor(saved.camera).Load(saved, *camera_);
-    return {file, loaded, SnapshotOfSavedMap(saved)};
+    FollowMap(std::make_shared<MapSnapshot>(SnapshotOfSavedMap(saved)));
+    return {file, loaded, saved};
   } catch (...) {
     if (fresh) {  // no stage made for a map refused: the next keyframe brings the camera
       stage_.reset();

@@ -53,35 +53,6 @@ std::string Quoted(const std::string& text) {
 
 }  // namespace
 
-FrameRecord RecordOf(const TrackingOutput& output, double timestamp) {
-  const odometry::TrackingResult& result = output.tracking;
-  FrameRecord record;
-  record.timestamp = timestamp;
-  record.timing = output.timing;
-  record.state = result.state;
-  record.T_world_camera = result.T_world_camera;
-  record.reference_keyframe = result.reference_keyframe;
-  record.T_keyframe_camera = result.T_keyframe_camera;
-  record.is_keyframe = result.keyframe.has_value();
-  record.inliers = result.inliers;
-  record.note = result.reason;
-  return record;
-}
-
-std::string DescribeRelocalization(const relocalization::Relocalization& r) {
-  return std::string(relocalization::RelocalizationStatusName(r.status)) +
-         (r.keyframe_id >= 0 ? " against keyframe " + std::to_string(r.keyframe_id)
-                             : std::string()) +
-         ": " + r.reason;
-}
-
-void RecordRelocalization(const RelocalizationAnswer& answer, FrameRecord* record) {
-  if (answer.already_joined) return;
-  record->timing.relocalization_ms = answer.ms;
-  record->relocalization = DescribeRelocalization(answer.result);
-  record->relocalized = answer.result.success();
-}
-
 void JsonObject::Add(const std::string& key, double value, int decimals) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.*f", decimals, value);

@@ -31,7 +31,7 @@ void StereoSlam::EnableLoopClosing(place_recognition::LoopDetector detector,
     throw std::logic_error("StereoSlam::EnableLoopClosing after the first frame");
   }
   mapping_ = MappingStage(bundle_adjustment_options_, pose_graph_options, clock_);
-  place_.emplace(std::move(detector), relocalizer_options, clock_);
+  place_.emplace(PlaceStage(std::move(detector), relocalizer_options, clock_), tracking_.camera());
   tracking_.SetAttemptEveryNFrames(relocalizer_options.attempt_every_n_frames);
 }
 
@@ -50,7 +50,6 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
   last_events_ = output.events;
   if (!output.tracked) return nullptr;
   const odometry::TrackingResult& result = output.tracking;
-  FrameRecord record = RecordOf(output, timestamp);
 
   // The keyframe's bundle adjustment, whose update the tracker follows before the next frame,
   // and (mapping mode) the pose graph; the place stage makes it a place.
@@ -60,29 +59,30 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
     mapped = mapping_.AddKeyframe(*result.keyframe, tracking_.camera());
     tracking_.ApplyUpdate(mapped->update);
     record_.ApplyUpdate(mapped->update);
+    if (place_) place_->stage()->AddKeyframe(*result.keyframe, *mapped);
+  }
+  // Before loop detection: after a loss, finding the frame in the map is relocalization's job,
+  // and the loop detection of the same keyframe then adds a loop within one map.
+  std::optional<RelocalizationAnswer> answer;
+  double relocalization_edge_ms = 0;
+  if (place_ && output.relocalization) {
+    answer = place_->Relocalize(*output.relocalization, mapping_);
+    if (answer->edge) {
+      relocalization_edge_ms =
+          mapping_.AddEdge(*answer->edge, backend::PoseGraphEdgeType::kRelocalization);
+    }
+    const RelocalizationOutcome outcome =
+        tracking_.OnRelocalization(*output.relocalization, *answer);
+    if (outcome.T_map_odom) mapping_.SetLocalizationCorrection(*outcome.T_map_odom);
+  }
+  FrameRecord record = tracking_.RecordFrame(output, timestamp, answer ? &*answer : nullptr);
+  if (mapped) {
     record.timing.bundle_adjustment_ms = mapped->bundle_adjustment_ms;
     record.timing.pose_graph_ms += mapped->pose_graph_ms;
-    if (place_) place_->AddKeyframe(*result.keyframe, *mapped);
   }
-  if (place_) {
-    // Before loop detection: after a loss, finding the frame in the map is relocalization's job,
-    // and the loop detection of the same keyframe then adds a loop within one map.
-    if (output.relocalization) {
-      const RelocalizationAnswer answer = place_->Relocalize(*output.relocalization, mapping_);
-      if (answer.edge) {
-        record.timing.pose_graph_ms +=
-            mapping_.AddEdge(*answer.edge, backend::PoseGraphEdgeType::kRelocalization);
-      }
-      const RelocalizationOutcome outcome =
-          tracking_.OnRelocalization(*output.relocalization, answer);
-      if (outcome.T_map_odom) mapping_.SetLocalizationCorrection(*outcome.T_map_odom);
-      RecordRelocalization(answer, &record);
-    }
-    record.on_map = tracking_.on_map();
-    record.T_map_camera = tracking_.T_map_camera();
-  }
+  record.timing.pose_graph_ms += relocalization_edge_ms;
   if (place_ && mapped && mapped->in_map_graph) {
-    PlaceResult place = place_->DetectLoop(mapped->keyframe_id);
+    PlaceResult place = place_->stage()->DetectLoop(mapped->keyframe_id);
     record.timing.loop_detection_ms = place.detection_ms;
     record.timing.pose_graph_ms +=
         mapping_.ApplyLoopDetection(place.keyframe_id, place.detection.loop);
@@ -92,20 +92,22 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
   return &record_.frames().back();
 }
 
-void StereoSlam::SaveMap(const std::string& path) const {
+MapFileAnswer StereoSlam::SaveMap(const std::string& path) const {
   if (!place_) throw std::logic_error("StereoSlam::SaveMap: loop closing is off");
-  map::SaveMapFile(path, place_->Save(mapping_, tracking_.camera()));
+  return place_->SaveMap(path, mapping_);
 }
 
-void StereoSlam::LoadMap(const std::string& path) {
+MapFileAnswer StereoSlam::LoadMap(const std::string& path) {
   if (!place_) throw std::logic_error("StereoSlam::LoadMap: loop closing is off");
-  const map::SavedMap saved = map::LoadMapFile(path);
-  const LoadedMap loaded = place_->Load(saved, tracking_.camera());  // checks it all first
-  mapping_.Load(saved);
-  tracking_.OnMapLoaded(loaded);
-  for (const map::SavedKeyframe& keyframe : saved.keyframes) {
+  std::optional<LoadedMapFile> file;
+  const MapFileAnswer answer = place_->LoadMap(path, &file);  // checks it all first
+  if (!file) return answer;
+  mapping_.Load(file->saved);
+  tracking_.OnMapLoaded(file->loaded);
+  for (const map::SavedKeyframe& keyframe : file->saved.keyframes) {
     record_.AddKeyframeTime(keyframe.keyframe.id, keyframe.keyframe.timestamp);
   }
+  return answer;
 }
 
 RelocalizationOutput StereoSlam::Relocalize(const cv::Mat& left_raw,

@@ -51,7 +51,8 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   output.tracked = true;
   output.timing = tracked.timing;
   output.tracking = std::move(tracked.tracking);
-  if (!places() || map == nullptr) return output;
+  map_followed_ = places() && map != nullptr;
+  if (!map_followed_) return output;
 
   const odometry::TrackingResult& result = output.tracking;
   const RelocalizationPolicy::Decision decision = policy_.Decide(result, !map->empty());
@@ -75,6 +76,35 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   request.from_user = decision.from_user;
   output.relocalization = std::move(request);
   return output;
+}
+
+TrackingOutput TrackingStage::Refuse(const std::string& reason) {
+  input_.CountRefused();
+  TrackingOutput output;
+  output.events.push_back({InputEvent::Kind::kUnreadable, reason + "; frame skipped", true, true});
+  return output;
+}
+
+FrameRecord TrackingStage::RecordFrame(const TrackingOutput& output, double timestamp,
+                                       const RelocalizationAnswer* answer) const {
+  const odometry::TrackingResult& result = output.tracking;
+  FrameRecord record;
+  record.timestamp = timestamp;
+  record.timing = output.timing;
+  record.state = result.state;
+  record.T_world_camera = result.T_world_camera;
+  record.reference_keyframe = result.reference_keyframe;
+  record.T_keyframe_camera = result.T_keyframe_camera;
+  record.is_keyframe = result.keyframe.has_value();
+  record.inliers = result.inliers;
+  record.note = result.reason;
+  if (answer != nullptr) RecordRelocalization(*answer, &record);
+  // Without a map to be on (no loop closing) every frame counts as on it: the map is the odometry.
+  if (map_followed_) {
+    record.on_map = policy_.on_map();
+    record.T_map_camera = policy_.T_map_camera();
+  }
+  return record;
 }
 
 void TrackingStage::OnMapLoaded(const LoadedMap& loaded) {

@@ -245,12 +245,16 @@ std::shared_ptr<const pipeline::MapSnapshot> MappingProgress::Snapshot() const {
   return snapshot_;
 }
 
-bool MappingProgress::WaitFor(std::int64_t keyframe, bool loop_closing,
-                              std::uint64_t relocalization_edges, double timeout) {
+void MappingProgress::OnRelocalizationEdgeSent() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++relocalization_edges_sent_;
+}
+
+bool MappingProgress::WaitFor(std::int64_t keyframe, bool loop_closing, double timeout) {
   std::unique_lock<std::mutex> lock(mutex_);
   return changed_.wait_for(lock, std::chrono::duration<double>(timeout), [&] {
     return last_update_ >= keyframe && (!loop_closing || last_closed_ >= keyframe) &&
-           relocalization_edges_ >= relocalization_edges;
+           relocalization_edges_ >= relocalization_edges_sent_;
   });
 }
 

@@ -151,11 +151,12 @@ class MappingProgress {
   void OnGraph(const stereo_fabmap_slam::MapGraph& graph);
   void OnUpdate(std::int64_t keyframe_id);
   std::shared_ptr<const pipeline::MapSnapshot> Snapshot() const;
+  // The LoopDetector answered a relocalization with an edge, which it sent to the Backend.
+  void OnRelocalizationEdgeSent();
   // Waits until the Backend has answered keyframe `keyframe` (-1: none) with its update and, if
-  // `loop_closing`, applied its loop detection, and has received `relocalization_edges` edges;
+  // `loop_closing`, applied its loop detection, and has received every relocalization edge sent;
   // false after `timeout` seconds without.
-  bool WaitFor(std::int64_t keyframe, bool loop_closing, std::uint64_t relocalization_edges,
-               double timeout);
+  bool WaitFor(std::int64_t keyframe, bool loop_closing, double timeout);
 
  private:
   mutable std::mutex mutex_;
@@ -163,7 +164,8 @@ class MappingProgress {
   std::shared_ptr<const pipeline::MapSnapshot> snapshot_ =
       std::make_shared<pipeline::MapSnapshot>();
   std::int64_t last_update_ = -1, last_closed_ = -1;
-  std::uint64_t relocalization_edges_ = 0;
+  std::uint64_t relocalization_edges_ = 0;  // the Backend has received
+  std::uint64_t relocalization_edges_sent_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::ros_wiring

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <numeric>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -154,7 +155,11 @@ int main(int argc, char** argv) {
     pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier, NowMs);
     if (loop_closing) {
       options.EnableLoopClosing(*place_options, rectifier, &slam);
-      if (load_map) slam.LoadMap(*load_map);
+      if (load_map) {
+        const pipeline::MapFileAnswer loaded = slam.LoadMap(*load_map);
+        if (!loaded.success) throw std::runtime_error("--load-map: " + loaded.message);
+        if (!quiet) std::printf("%s\n", loaded.message.c_str());
+      }
       slam.SetMode(mode);
     }
     const std::size_t loaded_keyframes = slam.mapping().pose_graph().size();
@@ -187,7 +192,11 @@ int main(int argc, char** argv) {
     }
     const double wall_s = (NowMs() - wall_start) / 1000.0;
     const double cpu_s = CpuSeconds() - cpu_start;
-    if (save_map) slam.SaveMap(*save_map);
+    if (save_map) {
+      const pipeline::MapFileAnswer saved = slam.SaveMap(*save_map);
+      if (!saved.success) throw std::runtime_error("--save-map: " + saved.message);
+      if (!quiet) std::printf("%s\n", saved.message.c_str());
+    }
 
     const io::Trajectory trajectory = slam.MapTrajectory();
     const io::Trajectory odometry_trajectory = slam.OdometryTrajectory();

@@ -107,6 +107,15 @@ bool Contains(const std::vector<std::string>& texts, const std::string& part) {
   return false;
 }
 
+TEST(PlaceService, ModesAreAskedForByName) {
+  EXPECT_EQ(pipeline::ModeNamed("localization").mode, pipeline::SlamMode::kLocalization);
+  EXPECT_EQ(pipeline::ModeNamed("localization").message, "mode localization");
+  EXPECT_EQ(pipeline::ModeNamed("mapping").mode, pipeline::SlamMode::kMapping);
+  const pipeline::ModeAnswer bogus = pipeline::ModeNamed("Mapping ");
+  EXPECT_FALSE(bogus.mode.has_value());
+  EXPECT_EQ(bogus.message, "unknown mode 'Mapping ' (mapping, localization)");
+}
+
 TEST_F(PlaceStageQueries, AServiceStartsEmptyAndMappingWhenItsModeOrMapIsRefused) {
   TemporaryDirectory temp;
   int stages = 0;
@@ -188,6 +197,14 @@ TEST_F(PlaceStageQueries, AServiceSavesAndLoadsMapsAndSaysWhatItsPlacesDoNotCove
   EXPECT_TRUE(Contains(
       restarted.Take(late, kTestCamera, other_mapping.AddKeyframe(late, kTestCamera)).warnings,
       "first keyframe received is 6: the keyframes before it are not places"));
+  // A keyframe whose own message never came: no place, and said so.
+  const pipeline::PlaceService::KeyframeOutcome unseen =
+      restarted.Take(other_mapping.AddKeyframe(Keyframe(7), kTestCamera));
+  EXPECT_FALSE(unseen.result.has_value());
+  EXPECT_TRUE(Contains(unseen.warnings,
+                       "keyframe 7 joined the map, but its keyframe message "
+                       "never arrived"));
+  EXPECT_FALSE(restarted.stage()->detector().database().Contains(7));
 
   // Loaded into a service without a stage: made with the map's camera, numbered above it, and
   // the map as the mapping stage will rebuild it from the same file.
@@ -201,10 +218,13 @@ TEST_F(PlaceStageQueries, AServiceSavesAndLoadsMapsAndSaysWhatItsPlacesDoNotCove
   EXPECT_EQ(loaded->path, path);
   EXPECT_EQ(loaded->loaded.keyframes, 4u);
   EXPECT_EQ(loaded->loaded.next_keyframe_id, 4);
-  ASSERT_EQ(loaded->map.keyframes.size(), 4u);
+  EXPECT_EQ(loaded->saved.keyframes.size(), 4u);
+  // Until the mapping stage says otherwise, relocalization and saves are about the file's map.
+  const std::shared_ptr<const pipeline::MapSnapshot> followed = loading.followed_map();
+  ASSERT_EQ(followed->keyframes.size(), 4u);
   for (std::int64_t id = 0; id < 4; ++id) {
-    EXPECT_TRUE(loaded->map.InMap(id));
-    EXPECT_TRUE(loaded->map.MapPose(id).isApprox(mapping_.MapPose(id), 1e-9)) << id;
+    EXPECT_TRUE(followed->InMap(id));
+    EXPECT_TRUE(followed->MapPose(id).isApprox(mapping_.MapPose(id), 1e-9)) << id;
   }
   EXPECT_EQ(loaded_stages, 1);
   // A file refused later leaves the loaded map as it was.
@@ -215,6 +235,11 @@ TEST_F(PlaceStageQueries, AServiceSavesAndLoadsMapsAndSaysWhatItsPlacesDoNotCove
   EXPECT_FALSE(none.has_value());
   ASSERT_NE(loading.stage(), nullptr);
   EXPECT_TRUE(loading.stage()->detector().database().Contains(3));
+  // The mapping stage's next word replaces it.
+  auto graph = std::make_shared<pipeline::MapSnapshot>(*followed);
+  graph->keyframes.erase(3);
+  loading.FollowMap(graph);
+  EXPECT_EQ(loading.followed_map()->keyframes.size(), 3u);
   // Loop queries go through the same checks as the stage's.
   EXPECT_THROW(restarted.Answer(Stored(2), kTestCamera), std::invalid_argument);
   EXPECT_NO_THROW(loading.Answer(Stored(2), kTestCamera));

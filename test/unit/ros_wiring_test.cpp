@@ -97,5 +97,25 @@ TEST(RelocalizeTimeout, ANumberOfSecondsUpToAMinuteOrARefusal) {
   }
 }
 
+// Lockstep's cue: the Backend's word on the keyframe, its loop detection, and every
+// relocalization edge the LoopDetector sent it (the graph counts the edges it received).
+TEST(MappingProgress, LockstepWaitsForTheKeyframeItsLoopDetectionAndEveryEdgeSent) {
+  ros_wiring::MappingProgress progress;
+  EXPECT_TRUE(progress.WaitFor(-1, true, 0.0)) << "a frame without a keyframe waits for nothing";
+  EXPECT_FALSE(progress.WaitFor(3, false, 0.01)) << "no update of keyframe 3 yet";
+  progress.OnUpdate(3);
+  EXPECT_TRUE(progress.WaitFor(3, false, 0.0));
+  EXPECT_FALSE(progress.WaitFor(3, true, 0.01)) << "its loop detection not applied yet";
+  stereo_fabmap_slam::MapGraph graph;
+  graph.last_closed_keyframe_id = 3;
+  progress.OnGraph(graph);
+  EXPECT_TRUE(progress.WaitFor(3, true, 0.0));
+  progress.OnRelocalizationEdgeSent();
+  EXPECT_FALSE(progress.WaitFor(3, true, 0.01)) << "the edge has not reached the Backend";
+  graph.relocalization_edges_received = 1;
+  progress.OnGraph(graph);
+  EXPECT_TRUE(progress.WaitFor(3, true, 0.0));
+}
+
 }  // namespace
 }  // namespace stereo_fabmap_slam::test

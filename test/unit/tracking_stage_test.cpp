@@ -138,15 +138,32 @@ TEST_F(TrackingStageTest, TimeGoingBackwardsResetsIntoANewSegmentThatIsFoundAgai
   EXPECT_TRUE(reset.relocalization->add_edge);
   EXPECT_EQ(reset.relocalization->reference_keyframe, reset.tracking.keyframe->id);
   EXPECT_FALSE(stage_->on_map());
+  EXPECT_FALSE(stage_->RecordFrame(reset, stamp_, nullptr).on_map) << "the record says so too";
   pipeline::RelocalizationAnswer found;
   found.result.status = relocalization::RelocalizationStatus::kSuccess;
   found.result.keyframe_id = 0;
+  found.result.reason = "42 inliers";
   found.map_pose_known = true;
+  found.ms = 7.5;
   const pipeline::RelocalizationOutcome outcome =
       stage_->OnRelocalization(*reset.relocalization, found);
   // Said as what it was, not as a tracking loss.
   EXPECT_NE(outcome.news.find("after time went backwards"), std::string::npos) << outcome.news;
   EXPECT_TRUE(stage_->on_map());
+  // Both drivers' record of the frame: its tracking, the attempt, and on the map after it.
+  const pipeline::FrameRecord record = stage_->RecordFrame(reset, stamp_, &found);
+  EXPECT_EQ(record.timestamp, stamp_);
+  EXPECT_EQ(record.reference_keyframe, reset.tracking.reference_keyframe);
+  EXPECT_TRUE(record.is_keyframe);
+  EXPECT_TRUE(record.on_map);
+  EXPECT_TRUE(record.relocalized);
+  EXPECT_EQ(record.timing.relocalization_ms, 7.5);
+  ASSERT_TRUE(record.relocalization.has_value());
+  EXPECT_NE(record.relocalization->find("against keyframe 0: 42 inliers"), std::string::npos)
+      << *record.relocalization;
+  pipeline::RelocalizationAnswer joined = found;
+  joined.already_joined = true;  // a loop had joined the segment: nothing was tried
+  EXPECT_FALSE(stage_->RecordFrame(reset, stamp_, &joined).relocalization.has_value());
   EXPECT_FALSE(Next().relocalization.has_value()) << "found: nothing more to ask";
 }
 
@@ -164,6 +181,34 @@ TEST_F(TrackingStageTest, BlankImagesLoseTrackingAndRealFramesGoOn) {
     tracked = Next().tracking.state != odometry::TrackingState::kLost;
   }
   EXPECT_TRUE(tracked) << "tracking resumes with real frames";
+}
+
+TEST_F(TrackingStageTest, AMessageThatIsNoImageIsRefusedCountedAndNamed) {
+  ASSERT_TRUE(Next().tracked);
+  const pipeline::TrackingOutput refused = stage_->Refuse("unsupported image encoding (rgb8)");
+  EXPECT_FALSE(refused.tracked);
+  EXPECT_TRUE(HasEvent(refused.events, InputEvent::Kind::kUnreadable,
+                       "unsupported image encoding (rgb8); frame skipped"));
+  EXPECT_EQ(stage_->input().counts().refused, 1u);
+  EXPECT_EQ(stage_->input().counts().tracked, 1u);
+  EXPECT_TRUE(Next().tracked) << "tracking goes on after the refused pair";
+}
+
+TEST_F(TrackingStageTest, WithoutAMapToFollowEveryFrameIsOnTheMap) {
+  // No loop closing (no map given): the odometry is the map, lost frames included, as
+  // run_dataset --no-loop-closing and a graph with loop_closing false both record it.
+  const datasets::StereoImages images = sequence_.LoadStereoPair(0);
+  const cv::Mat black(480, 752, CV_8UC1, cv::Scalar(0));
+  const pipeline::TrackingOutput first =
+      stage_->Process({stamp_ + kStep, images.left, images.right, 1}, nullptr);
+  const pipeline::TrackingOutput lost =
+      stage_->Process({stamp_ + 2 * kStep, black, black, 2}, nullptr);
+  ASSERT_EQ(lost.tracking.state, odometry::TrackingState::kLost);
+  for (const pipeline::TrackingOutput* output : {&first, &lost}) {
+    const pipeline::FrameRecord record = stage_->RecordFrame(*output, stamp_, nullptr);
+    EXPECT_TRUE(record.on_map);
+    EXPECT_FALSE(record.T_map_camera.has_value());
+  }
 }
 
 TEST_F(TrackingStageTest, PairsPassedOverTellTheTrackerHowFarApartItsFramesAre) {

@@ -11,7 +11,7 @@
 #include "stereo_fabmap_slam/backend/backend_options.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
-#include "stereo_fabmap_slam/pipeline/place_stage.h"
+#include "stereo_fabmap_slam/pipeline/place_service.h"
 #include "stereo_fabmap_slam/pipeline/run_record.h"
 #include "stereo_fabmap_slam/pipeline/slam_mode.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
@@ -53,12 +53,13 @@ class StereoSlam {
                          const relocalization::RelocalizerOptions& relocalizer_options = {});
   void SetMode(SlamMode mode);
   SlamMode mode() const { return mapping_.mode(); }
-  // The map (keyframes, words, pose graph) to a file, and back. Loading replaces the map after
-  // checking the file, its vocabulary, camera and graph (io::InputError says what is wrong; the
-  // running map stays as it was). After a load the odometry goes on in a segment of its own
-  // until a relocalization finds it in the loaded map. Loop closing must be on.
-  void SaveMap(const std::string& path) const;
-  void LoadMap(const std::string& path);
+  // The map (keyframes, words, pose graph) to a file, and back, with the answers the ROS
+  // services give (PlaceService: whole paths, refusals in words). Loading replaces the map after
+  // checking the file, its vocabulary, camera and graph (a refused file leaves the running map as
+  // it was). After a load the odometry goes on in a segment of its own until a relocalization
+  // finds it in the loaded map. Loop closing must be on.
+  MapFileAnswer SaveMap(const std::string& path) const;
+  MapFileAnswer LoadMap(const std::string& path);
 
   // Raw (unrectified) mono8 images of one stereo pair; `frames_skipped` stereo pairs were passed
   // over since the last one processed (a caller that cannot keep up: Tracker::Track). A pair the
@@ -77,7 +78,7 @@ class StereoSlam {
   // The map's state (null without loop closing): poses, pieces, edges.
   const MapState* map_state() const { return place_ ? &mapping_ : nullptr; }
   const MappingStage& mapping() const { return mapping_; }
-  const PlaceStage* place() const { return place_ ? &*place_ : nullptr; }
+  const PlaceStage* place() const { return place_ ? place_->stage() : nullptr; }
   const TrackingStage& tracking() const { return tracking_; }
   io::Trajectory MapTrajectory() const { return record_.MapTrajectory(map_state()); }
   io::Trajectory OdometryTrajectory() const { return record_.OdometryTrajectory(); }
@@ -92,7 +93,7 @@ class StereoSlam {
   TrackingStage tracking_;
   MappingStage mapping_;
   backend::BundleAdjustmentOptions bundle_adjustment_options_;
-  std::optional<PlaceStage> place_;
+  std::optional<PlaceService> place_;
   RunRecord record_;
   std::uint64_t arrival_ = 0;  // pairs seen, skipped ones included
   std::vector<InputEvent> last_events_;

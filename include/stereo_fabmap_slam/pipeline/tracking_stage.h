@@ -10,6 +10,7 @@
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/map/keyframe_update.h"
+#include "stereo_fabmap_slam/pipeline/frame_record.h"
 #include "stereo_fabmap_slam/pipeline/input_monitor.h"
 #include "stereo_fabmap_slam/pipeline/map_state.h"
 #include "stereo_fabmap_slam/pipeline/place_stage.h"
@@ -80,6 +81,14 @@ class TrackingStage {
                                            const std::string& reason) {
     return policy_.OnNoAnswer(request, reason);
   }
+  // A pair the driver could not hand over (a message that is no image; `reason` says why):
+  // counted as refused, and named by the output's event.
+  TrackingOutput Refuse(const std::string& reason);
+  // The record of a frame Process tracked, once its relocalization request (if any) was answered
+  // (`answer`; null: none was asked, or it could not be asked): tracking's result, the attempt,
+  // and, with a map to follow, whether and where the frame was on the map afterwards.
+  FrameRecord RecordFrame(const TrackingOutput& output, double timestamp,
+                          const RelocalizationAnswer* answer) const;
 
   // The bundle adjustment's corrections of the local map (MappedKeyframe::update).
   void ApplyUpdate(const map::KeyframeUpdate& update);
@@ -112,6 +121,7 @@ class TrackingStage {
   InputMonitor input_;
   RelocalizationPolicy policy_;
   Clock clock_;
+  bool map_followed_ = false;  // the last frame was tracked with places and a map (Process)
   // The ids a map loaded before Calibrate numbers the odometry's keyframes and points from.
   std::int64_t first_keyframe_id_ = 0, first_point_id_ = 0;
 };
