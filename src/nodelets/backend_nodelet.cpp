@@ -28,6 +28,7 @@
 #include "stereo_fabmap_slam/map/map_file.h"
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 #include "tracker_wiring.h"
+#include "transform_repeater.h"
 
 namespace stereo_fabmap_slam {
 
@@ -73,7 +74,8 @@ class BackendNodelet : public nodelet::Nodelet {
   ros::Publisher update_publisher_, graph_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   ros::WallTimer tf_timer_;
-  ros::Time last_tf_stamp_;  // only the timer's thread touches it
+  ros::Time last_tf_stamp_;                 // only the timer's thread touches it
+  ros_wiring::TransformRepeater repeater_;  // map -> odom while the clock stands still
   std::mutex mutex_;
   std::condition_variable wake_;
   // Never bounded by dropping: a keyframe missing from the map would leave a hole in the graph.
@@ -212,20 +214,28 @@ std_msgs::Header BackendNodelet::HeaderOf(const Input& input) {
 }
 
 void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {
-  // On simulated time the clock may not have moved since the last broadcast (a bag paused or
-  // slower than the timer): the same stamp again would only make tf listeners warn.
-  const ros::Time now = ros::Time::now();
-  if (now <= last_tf_stamp_) return;
-  last_tf_stamp_ = now;
   geometry_msgs::TransformStamped transform;
   {
     std::lock_guard<std::mutex> lock(map_to_odom_mutex_);
     transform.transform = ros_conversions::ToTransformMessage(map_to_odom_);
   }
-  transform.header.stamp = now;
   transform.header.frame_id = map_frame_;
   transform.child_frame_id = odom_frame_;
+  const ros::Time now = ros::Time::now();
+  const double wall = ros::WallTime::now().toSec();
+  if (now > last_tf_stamp_) {
+    transform.header.stamp = now;
+  } else {
+    // On simulated time the clock may stand still (a bag paused, ended, or slower than the
+    // timer): the same stamp again would only make tf listeners warn. Once a second, the
+    // transform a nanosecond after the last (TransformRepeater), for listeners started since.
+    const std::vector<geometry_msgs::TransformStamped> due = repeater_.Due(wall, now);
+    if (due.empty()) return;
+    transform.header.stamp = due.front().header.stamp;
+  }
+  last_tf_stamp_ = transform.header.stamp;
   tf_broadcaster_->sendTransform(transform);
+  repeater_.Sent(transform, wall);
 }
 
 }  // namespace stereo_fabmap_slam

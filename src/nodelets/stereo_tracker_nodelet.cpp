@@ -74,6 +74,7 @@ void StereoTrackerNodelet::onInit() {
   }
   const ros_wiring::TrackerParameters& p = parameters_;
   NODELET_INFO_STREAM("options in force:\n" << p.printed);
+  for (const std::string& warning : p.warnings) NODELET_WARN("%s", warning.c_str());
   stage_ = std::make_unique<pipeline::TrackingStage>(
       p.options, p.monitor, p.relocalizer.attempt_every_n_frames, ros_wiring::SteadyMilliseconds);
   pairs_.Configure(p.options.tracker.queued_pairs, p.options.tracker.catch_up_gap,
@@ -101,12 +102,6 @@ void StereoTrackerNodelet::onInit() {
         }
       });
   if (p.use_camera_info) {
-    if (!p.base_to_camera) {
-      NODELET_WARN(
-          "use_camera_info without ~base_to_camera: camera_info does not say where the "
-          "camera sits, so base_link is taken to be the raw left camera (z forward, "
-          "not REP-103's x forward, z up); give ~base_to_camera for a robot's base");
-    }
     input_->SubscribeCameraInfo(node, p.queue_size, [this](const auto& left, const auto& right) {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stage_->calibrated()) return;  // the first pair defines the rectification

@@ -23,7 +23,16 @@ TrackerOutputs::TrackerOutputs(ros::NodeHandle& node, const FrameNames& names, b
       image_(node.advertise<sensor_msgs::Image>("tracking_image", 2)),
       correction_(node.advertise<geometry_msgs::TransformStamped>("map_to_odom_correction", 10)),
       tf_(std::make_unique<tf2_ros::TransformBroadcaster>()),
-      static_tf_(std::make_unique<tf2_ros::StaticTransformBroadcaster>()) {}
+      static_tf_(std::make_unique<tf2_ros::StaticTransformBroadcaster>()) {
+  if (!publish_tf) return;
+  // Checked four times a period: a repeat comes at most a quarter period late.
+  repeat_timer_ = node.createWallTimer(ros::WallDuration(0.25), [this](const ros::WallTimerEvent&) {
+    for (const geometry_msgs::TransformStamped& transform :
+         repeater_.Due(ros::WallTime::now().toSec(), ros::Time::now())) {
+      tf_->sendTransform(transform);
+    }
+  });
+}
 
 void TrackerOutputs::SetMounting(const Eigen::Isometry3d& T_base_camera) {
   frames_.emplace(T_base_camera);
@@ -61,6 +70,7 @@ void TrackerOutputs::PublishTracking(const ros::Time& stamp, const pipeline::Tra
     transform.child_frame_id = names_.base;
     transform.transform = ros_conversions::ToTransformMessage(frames_->BaseInOdom(T_first_camera));
     tf_->sendTransform(transform);
+    repeater_.Sent(transform, ros::WallTime::now().toSec());
   }
   if (result.keyframe) {
     stereo_fabmap_slam::Keyframe keyframe =

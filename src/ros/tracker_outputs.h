@@ -22,6 +22,8 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include "transform_repeater.h"
+
 #include "base_frame_convention.h"
 #include "odometry_message_builder.h"
 #include "stereo_fabmap_slam/pipeline/relocalization_policy.h"
@@ -62,6 +64,8 @@ class TrackerOutputs {
   ros::Publisher odometry_, keyframes_, frames_publisher_, image_, correction_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
+  TransformRepeater repeater_;  // odom -> base_link after the input stops (the bag ended)
+  ros::WallTimer repeat_timer_;
   std::optional<ros_conversions::BaseFrameConvention> frames_;
   std::optional<ros_conversions::OdometryMessageBuilder> odometry_builder_;
 };

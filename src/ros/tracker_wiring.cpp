@@ -65,6 +65,12 @@ TrackerParameters ReadTrackerParameters(const ros::NodeHandle& private_node) {
   p.monitor.max_prediction_gap = p.options.tracker.max_prediction_gap;
   p.monitor.unpaired_limit = p.queue_size;
   p.base_to_camera = ros_input::ReadBaseToCamera(private_node);
+  if (p.use_camera_info && !p.base_to_camera) {
+    p.warnings.push_back(
+        "use_camera_info without ~base_to_camera: camera_info does not say where the camera "
+        "sits, so base_link is taken to be the raw left camera (z forward, not REP-103's x "
+        "forward, z up); give ~base_to_camera for a robot's base");
+  }
   if (!p.use_camera_info && !private_node.getParam("calibration_file", p.calibration_file)) {
     throw std::invalid_argument(
         "set ~calibration_file (e.g. config/euroc_stereo.yaml) or ~use_camera_info");

@@ -56,7 +56,8 @@ struct TrackerParameters {
   std::optional<Eigen::Isometry3d> base_to_camera;
   std::string calibration_file;
   int queue_size = 10;
-  std::string printed;  // the options in force, for the start-up log
+  std::string printed;                // the options in force, for the start-up log
+  std::vector<std::string> warnings;  // what the user should hear about the configuration
 };
 // Every ~parameter of the StereoTracker; throws std::exception naming a bad or missing one.
 TrackerParameters ReadTrackerParameters(const ros::NodeHandle& private_node);

@@ -28,6 +28,8 @@
 #include <stereo_fabmap_slam/DetectLoop.h>
 #include <stereo_fabmap_slam/Keyframe.h>
 #include <stereo_fabmap_slam/MapGraph.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
 #include "euroc_bag_fixture.h"
 #include "ros_conversions.h"
@@ -48,7 +50,30 @@ struct GraphRun {
   // inspected).
   int keyframes_not_in_backend_graph = -1;
   int keyframes_not_in_loop_detector = -1;
+  // A tf listener started after the bag's end: whether it found map -> base_link, and how far
+  // its odom -> base_link was from the last odometry message [m] (-1: not found).
+  bool tf_found_after_end = false;
+  double tf_distance_from_last_odometry = -1;
 };
+
+// After the bag: a tf listener started now must find the frames (the nodelets say their last
+// transforms again while nothing new comes; /tf is not latched). Polled by wall time: the bag's
+// clock has stopped, so tf2's own timeouts would never expire.
+void InspectTfAfterTheEnd(const Eigen::Isometry3d& last_odometry, GraphRun* run) {
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(5);
+  while (!buffer.canTransform("map", "base_link", ros::Time(0)) &&
+         ros::WallTime::now() < deadline) {
+    ros::WallDuration(0.1).sleep();
+  }
+  run->tf_found_after_end = buffer.canTransform("map", "base_link", ros::Time(0));
+  if (!buffer.canTransform("odom", "base_link", ros::Time(0))) return;
+  const Eigen::Isometry3d T_odom_base = ros_conversions::FromTransformMessage(
+      buffer.lookupTransform("odom", "base_link", ros::Time(0)).transform);
+  run->tf_distance_from_last_odometry =
+      (T_odom_base.translation() - last_odometry.translation()).norm();
+}
 
 // Once the bag has ended: which published keyframes the Backend's graph (its latest map_graph,
 // given up to 10 s to take in what is queued) and the LoopDetector's places (detect_loop by id)
@@ -149,6 +174,12 @@ GraphRun PlayBag(const std::string& bag, const std::string& arguments, const std
           return graph_ids;
         },
         &run);
+    InspectTfAfterTheEnd(
+        [&] {
+          std::lock_guard<std::mutex> lock(mutex);
+          return odometry.empty() ? Eigen::Isometry3d::Identity() : odometry.rbegin()->second;
+        }(),
+        &run);
     kill(launch_pid, SIGINT);
     for (int i = 0; i < 300 && kill(launch_pid, 0) == 0; ++i) ros::WallDuration(0.1).sleep();
   }
@@ -221,6 +252,11 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   RecordProperty("keyframes_not_in_loop_detector_fast", fast.keyframes_not_in_loop_detector);
   EXPECT_EQ(fast.keyframes_not_in_backend_graph, 0);
   EXPECT_EQ(fast.keyframes_not_in_loop_detector, 0);
+  // The graph stays up for inspection after the bag, tf included: a listener started then finds
+  // map -> base_link, at the last odometry (the same transform, so to a micrometre).
+  EXPECT_TRUE(fast.tf_found_after_end);
+  EXPECT_GE(fast.tf_distance_from_last_odometry, 0.0);
+  EXPECT_LT(fast.tf_distance_from_last_odometry, 1e-6);
   // Skipped pairs are reported. The queue absorbs the tracker's slow frames, and this machine
   // skipped 7 to 15 pairs at 3x and 70 to 117 at 5x; one much faster may skip none, and then has
   // nothing to say, but every pair has odometry.

@@ -11,6 +11,7 @@
 #include "place_wiring.h"
 #include "tracker_outputs.h"
 #include "tracker_wiring.h"
+#include "transform_repeater.h"
 
 namespace stereo_fabmap_slam::test {
 namespace {
@@ -115,6 +116,45 @@ TEST(MappingProgress, LockstepWaitsForTheKeyframeItsLoopDetectionAndEveryEdgeSen
   graph.relocalization_edges_received = 1;
   progress.OnGraph(graph);
   EXPECT_TRUE(progress.WaitFor(3, true, 0.0));
+}
+
+// After the bag's end the nodelets say their last transforms again, a nanosecond later each
+// time, so that tf tools started then find the frames and listeners that have them see no
+// repeated stamp.
+TEST(TransformRepeater, TheLastTransformsAgainOnceAPeriodPassedWithoutNews) {
+  ros_wiring::TransformRepeater repeater(1.0);
+  const ros::Time stopped(52, 0);  // the bag's clock, stopped 2 s after the last image
+  EXPECT_TRUE(repeater.Due(100.0, stopped).empty()) << "nothing sent, nothing to repeat";
+  geometry_msgs::TransformStamped base;
+  base.child_frame_id = "base_link";
+  base.header.stamp = ros::Time(50, 0);
+  base.transform.translation.x = 1.5;
+  base.transform.rotation.w = 1;
+  repeater.Sent(base, 100.0);
+  EXPECT_TRUE(repeater.Due(100.9, stopped).empty()) << "news within the period: a camera streams";
+  std::vector<geometry_msgs::TransformStamped> due = repeater.Due(101.0, stopped);
+  ASSERT_EQ(due.size(), 1u);
+  EXPECT_EQ(due[0].header.stamp, stopped) << "at the clock, where the other nodelets' are";
+  EXPECT_EQ(due[0].child_frame_id, "base_link");
+  EXPECT_EQ(due[0].transform.translation.x, 1.5);
+  EXPECT_TRUE(repeater.Due(101.5, stopped).empty()) << "at most once a period";
+  due = repeater.Due(102.0, stopped);
+  ASSERT_EQ(due.size(), 1u);
+  EXPECT_EQ(due[0].header.stamp, ros::Time(52, 1)) << "every repeat a new stamp";
+  // A second frame, and news: repeats wait a period from the news, then carry both.
+  geometry_msgs::TransformStamped map = base;
+  map.child_frame_id = "odom";
+  map.header.stamp = ros::Time(52, 1);
+  repeater.Sent(map, 102.5);
+  base.header.stamp = ros::Time(52, 0);
+  repeater.Sent(base, 102.6);
+  EXPECT_TRUE(repeater.Due(103.5, stopped).empty());
+  due = repeater.Due(103.6, stopped);
+  ASSERT_EQ(due.size(), 2u);
+  for (const geometry_msgs::TransformStamped& transform : due) {
+    EXPECT_EQ(transform.header.stamp,
+              transform.child_frame_id == "base_link" ? ros::Time(52, 1) : ros::Time(52, 2));
+  }
 }
 
 }  // namespace
