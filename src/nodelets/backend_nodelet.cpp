@@ -3,14 +3,11 @@
 // map -> odom in; keyframe_updates (one per keyframe), map_graph and tf map -> odom out. The
 // stage decides; this file queues every input in arrival order for a worker thread it owns,
 // converts, calls and publishes.
-#include <condition_variable>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
-#include <variant>
 #include <vector>
 
 #include <geometry_msgs/TransformStamped.h>
@@ -22,10 +19,10 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "backend_wiring.h"
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stage_conversions.h"
-#include "stereo_fabmap_slam/map/map_file.h"
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 #include "tracker_wiring.h"
 #include "transform_repeater.h"
@@ -35,36 +32,14 @@ namespace stereo_fabmap_slam {
 class BackendNodelet : public nodelet::Nodelet {
  public:
   ~BackendNodelet() override {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopping_ = true;
-    }
-    wake_.notify_all();
+    inputs_.Stop();
     if (worker_.joinable()) worker_.join();
   }
 
  private:
-  struct LoadMap {
-    std::string path;
-  };
-  // Every input, in the order it arrived: the stage takes them so.
-  using Input =
-      std::variant<stereo_fabmap_slam::KeyframeConstPtr, stereo_fabmap_slam::PlaceResultConstPtr,
-                   stereo_fabmap_slam::LoopEdgeConstPtr, LoadMap, pipeline::SlamMode,
-                   pipeline::LocalizationCorrectionInput>;
-
   void onInit() override;
-  void Push(Input input) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      inputs_.push_back(std::move(input));
-    }
-    wake_.notify_one();
-  }
+  void Push(ros_wiring::BackendInput input) { inputs_.Push(std::move(input)); }
   void Work();
-  // The stage's input of a message; throws for a map file that cannot be read.
-  static pipeline::MappingInput Convert(const Input& input);
-  static std_msgs::Header HeaderOf(const Input& input);  // a keyframe's, else empty
   void OnTfTimer(const ros::WallTimerEvent&);
 
   std::string map_frame_, odom_frame_;
@@ -76,12 +51,7 @@ class BackendNodelet : public nodelet::Nodelet {
   ros::WallTimer tf_timer_;
   ros::Time last_tf_stamp_;                 // only the timer's thread touches it
   ros_wiring::TransformRepeater repeater_;  // map -> odom while the clock stands still
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  // Never bounded by dropping: a keyframe missing from the map would leave a hole in the graph.
-  // Under load the stage adjusts the newest of the waiting keyframes together (MappingStage::Take).
-  std::deque<Input> inputs_;
-  bool stopping_ = false;
+  ros_wiring::ArrivalQueue inputs_;  // in the order they arrived: the stage takes them so
   std::thread worker_;
   std::mutex map_to_odom_mutex_;
   Eigen::Isometry3d map_to_odom_ = Eigen::Isometry3d::Identity();
@@ -120,8 +90,9 @@ void BackendNodelet::onInit() {
       "relocalization_edges", 100,
       [this](const stereo_fabmap_slam::LoopEdgeConstPtr& m) { Push(m); });
   loaded_subscriber_ = node.subscribe<stereo_fabmap_slam::MapLoaded>(
-      "map_loaded", 1,
-      [this](const stereo_fabmap_slam::MapLoadedConstPtr& m) { Push(LoadMap{m->path}); });
+      "map_loaded", 1, [this](const stereo_fabmap_slam::MapLoadedConstPtr& m) {
+        Push(ros_wiring::MapFileLoaded{m->path});
+      });
   mode_subscriber_ =
       node.subscribe<std_msgs::String>("mode", 1, [this](const std_msgs::StringConstPtr& m) {
         if (const auto mode = pipeline::ParseSlamMode(m->data)) Push(*mode);
@@ -141,22 +112,15 @@ void BackendNodelet::onInit() {
 }
 
 void BackendNodelet::Work() {
-  while (true) {
-    std::deque<Input> waiting;
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || !inputs_.empty(); });
-      if (stopping_) return;
-      waiting.swap(inputs_);
-    }
+  while (const std::optional<std::deque<ros_wiring::BackendInput>> waiting = inputs_.TakeAll()) {
     // The stage takes everything that waited at once (MappingStage::Take: under load it adjusts
     // the newest of the waiting keyframes together).
     std::vector<pipeline::MappingInput> batch;
     std::vector<std_msgs::Header> headers;  // of the batch's inputs, for the keyframe updates
-    for (const Input& input : waiting) {
+    for (const ros_wiring::BackendInput& input : *waiting) {
       try {
-        batch.push_back(Convert(input));
-        headers.push_back(HeaderOf(input));
+        batch.push_back(ros_wiring::ToMappingInput(input));
+        headers.push_back(ros_wiring::HeaderOf(input));
       } catch (const std::exception& error) {
         NODELET_ERROR("input skipped: %s", error.what());
       }
@@ -184,33 +148,6 @@ void BackendNodelet::Work() {
     message.header.frame_id = map_frame_;
     graph_publisher_.publish(message);
   }
-}
-
-pipeline::MappingInput BackendNodelet::Convert(const Input& input) {
-  if (const auto* keyframe = std::get_if<stereo_fabmap_slam::KeyframeConstPtr>(&input)) {
-    return pipeline::KeyframeInput{ros_conversions::FromKeyframeMessage(**keyframe),
-                                   ros_conversions::CameraOfKeyframe(**keyframe)};
-  }
-  if (const auto* place = std::get_if<stereo_fabmap_slam::PlaceResultConstPtr>(&input)) {
-    const pipeline::PlaceResult result = ros_conversions::FromPlaceResultMessage(**place);
-    return pipeline::LoopDetectionInput{result.keyframe_id, result.detection.loop};
-  }
-  if (const auto* edge = std::get_if<stereo_fabmap_slam::LoopEdgeConstPtr>(&input)) {
-    return pipeline::RelocalizationEdgeInput{ros_conversions::FromLoopEdgeMessage(**edge)};
-  }
-  if (const auto* load = std::get_if<LoadMap>(&input)) {
-    // The LoopDetector checked the file; the graph is rebuilt from the same file.
-    return pipeline::LoadedMapInput{map::LoadMapFile(load->path), load->path};
-  }
-  if (const auto* mode = std::get_if<pipeline::SlamMode>(&input)) return *mode;
-  return std::get<pipeline::LocalizationCorrectionInput>(input);
-}
-
-std_msgs::Header BackendNodelet::HeaderOf(const Input& input) {
-  if (const auto* keyframe = std::get_if<stereo_fabmap_slam::KeyframeConstPtr>(&input)) {
-    return (*keyframe)->header;
-  }
-  return std_msgs::Header();
 }
 
 void BackendNodelet::OnTfTimer(const ros::WallTimerEvent&) {

@@ -4,10 +4,12 @@
 // timeout.
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <boost/make_shared.hpp>
 
+#include "backend_wiring.h"
 #include "place_wiring.h"
 #include "tracker_outputs.h"
 #include "tracker_wiring.h"
@@ -155,6 +157,30 @@ TEST(TransformRepeater, TheLastTransformsAgainOnceAPeriodPassedWithoutNews) {
     EXPECT_EQ(transform.header.stamp,
               transform.child_frame_id == "base_link" ? ros::Time(52, 1) : ros::Time(52, 2));
   }
+}
+
+// The Backend's inputs reach its stage in the order they arrived, all that waited at once.
+TEST(ArrivalQueue, HandsOverEverythingThatWaitedInArrivalOrder) {
+  ros_wiring::ArrivalQueue queue;
+  auto keyframe = boost::make_shared<stereo_fabmap_slam::Keyframe>();
+  keyframe->header.stamp = ros::Time(12, 5);
+  queue.Push(pipeline::SlamMode::kLocalization);
+  queue.Push(stereo_fabmap_slam::KeyframeConstPtr(keyframe));
+  queue.Push(ros_wiring::MapFileLoaded{"/nonexistent/map.bin"});
+  const std::optional<std::deque<ros_wiring::BackendInput>> waiting = queue.TakeAll();
+  ASSERT_TRUE(waiting.has_value());
+  ASSERT_EQ(waiting->size(), 3u);
+  EXPECT_EQ(std::get<pipeline::SlamMode>(ros_wiring::ToMappingInput((*waiting)[0])),
+            pipeline::SlamMode::kLocalization);
+  EXPECT_EQ(ros_wiring::HeaderOf((*waiting)[1]).stamp, ros::Time(12, 5))
+      << "a keyframe's update carries its header";
+  EXPECT_TRUE(ros_wiring::HeaderOf((*waiting)[0]).stamp.isZero());
+  // A map file gone since the LoopDetector took it: the Backend logs and skips the input.
+  EXPECT_THROW(ros_wiring::ToMappingInput((*waiting)[2]), std::exception);
+  // Stopping wakes a worker that waits.
+  std::thread worker([&] { EXPECT_FALSE(queue.TakeAll().has_value()); });
+  queue.Stop();
+  worker.join();
 }
 
 }  // namespace
