@@ -346,13 +346,14 @@ double LastImageStamp(const std::string& sequence) {
 // "do not synchronise"), and the Backend and LoopDetector drop no keyframe. At 2x the tracker
 // nearly keeps up (four runs: 195-200 of 200 pairs with odometry, no loss, no stretch of the
 // bag longer than 0.1 s without odometry). At 10x it tracks a quarter of the pairs or fewer
-// (28-53 of 200 in four runs) and may lose the track (0, 0, 2 and 1 new pieces; the longest
-// stretch without odometry 1.25-5.4 s of the bag, the lost frames): recorded, not asserted.
+// (28-53 of 200 in seven runs) and may lose the track (0-2 new pieces in nine runs; the longest
+// stretch without odometry 1.25-5.4 s of the bag, the lost frames): bounded below.
 TEST(Load, TwoAndTenTimesRealTime) {
   TemporaryDirectory temp;
   const std::string bag = temp.path() + "/mh01.bag";
   WriteEurocSubsetBag("MH01_first10s", bag);
   const double last_image = LastImageStamp("MH01_first10s");
+  GraphRun two_x;  // the reference of the 10x run's pieces: one piece, nearly every pair
   for (const int rate : {2, 10}) {
     const std::string name = std::to_string(rate) + "x";
     const GraphRun run = PlayBag(bag, "rate:=" + std::to_string(rate),
@@ -379,7 +380,19 @@ TEST(Load, TwoAndTenTimesRealTime) {
       // The queue keeps gaps to 0.1 s (tracker/catch_up_gap) while it is not far behind; 0.3 s
       // allows a slower machine to fall behind for a moment.
       EXPECT_LE(LongestOdometryGap(run), 0.3) << run.log;
+      two_x = run;
+      continue;
     }
+    // 10x: losses are allowed, a tracker that cannot hold is not. Nine runs lost the track 0-2
+    // times in 28-53 tracked pairs; four is twice the most seen, for a machine that skips more,
+    // and far from a tracker that loses most of its ~30 frames. Each piece of odometry between
+    // losses must still be right: 2.4-4.3 mm against the 2x run in three runs (5x: 1.7-13.9 mm,
+    // above), so the 5x bound of 2.5 cm holds it, far below a piece that drifted or was tracked
+    // against the wrong place (tens of centimetres).
+    EXPECT_LE(run.new_map_stamps.size(), 4u) << run.log;
+    const double worst_piece_ate = WorstPieceAte(two_x.odometry, run);
+    RecordProperty("worst_piece_ate_10x_against_2x_m", std::to_string(worst_piece_ate));
+    EXPECT_LT(worst_piece_ate, 0.025);
   }
 }
 
