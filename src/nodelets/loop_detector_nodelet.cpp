@@ -5,6 +5,7 @@
 // start, ~save_map at the end), set_mode (and ~mode), announced as map_loaded and mode. The
 // place service (pipeline::PlaceService) decides; this file pairs each keyframe with its answer,
 // converts, calls and publishes.
+#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -36,10 +37,12 @@ class LoopDetectorNodelet : public nodelet::Nodelet {
     if (worker_.joinable()) worker_.join();
     if (parameters_.save_map_at_exit.empty() || !places_) return;
     std::lock_guard<std::mutex> lock(mutex_);  // a service call may still be answered
-    ROS_INFO_STREAM(
-        "[loop_detector] ~save_map "
-        << parameters_.save_map_at_exit << ": "
-        << places_->SaveMap(parameters_.save_map_at_exit, *places_->followed_map()).message);
+    const pipeline::MapFileAnswer saved =
+        places_->SaveMap(parameters_.save_map_at_exit, *places_->followed_map());
+    // On stderr: when the manager unloads its nodelets, rosconsole has shut down with the node
+    // and its macros print nothing, so a failed save would go unsaid.
+    std::fprintf(stderr, "[loop_detector] ~save_map %s: %s\n", parameters_.save_map_at_exit.c_str(),
+                 saved.message.c_str());
   }
 
  private:

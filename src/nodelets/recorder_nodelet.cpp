@@ -2,6 +2,7 @@
 // pipeline::RunRecord): into ~output, when the graph shuts down, trajectory.txt (map frame,
 // every frame), odometry.txt, keyframes.txt, loops.csv, timing.csv and summary.json. It listens
 // to the stages' outputs and changes nothing.
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -25,9 +26,12 @@ class RecorderNodelet : public nodelet::Nodelet {
     if (!recorder_) return;
     try {
       recorder_->Write(output_, std::filesystem::path(output_).filename().string());
-      ROS_INFO("[recorder] run written to %s: %zu frames", output_.c_str(), recorder_->frames());
+      // On stderr: rosconsole has shut down with the node when the manager unloads its
+      // nodelets, and its macros print nothing.
+      std::fprintf(stderr, "[recorder] run written to %s: %zu frames\n", output_.c_str(),
+                   recorder_->frames());
     } catch (const std::exception& error) {
-      ROS_ERROR("[recorder] run not written to %s: %s", output_.c_str(), error.what());
+      std::fprintf(stderr, "[recorder] run not written to %s: %s\n", output_.c_str(), error.what());
     }
   }
 

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -101,10 +102,14 @@ TEST(Misconfiguration, ARefusedMapFileOrModeLeavesTheGraphRunning) {
     called = ros::service::call("/set_mode", mode) && ros::service::call("/load_map", load);
   });
   const std::string log = temp.path() + "/roslaunch.log";
+  // At the end the map goes to a folder that is not there, and the run to one that is made.
+  const std::string unwritable = temp.path() + "/no/such/folder/end.map";
+  const std::string run = temp.path() + "/run";
   const int status =
       std::system(("timeout 120 roslaunch --wait stereo_fabmap_slam euroc_bag.launch "
                    "exit_at_end:=true visualizer:=false mode:=bogus map_file:=" +
-                   damaged + " bag:=" + bag + " > " + log + " 2>&1")
+                   damaged + " save_map:=" + unwritable + " output:=" + run + " bag:=" + bag +
+                   " > " + log + " 2>&1")
                       .c_str());
   caller.join();
   spinner.stop();
@@ -127,6 +132,16 @@ TEST(Misconfiguration, ARefusedMapFileOrModeLeavesTheGraphRunning) {
   EXPECT_FALSE(load.response.success);
   EXPECT_NE(load.response.message.find("the map is unchanged"), std::string::npos)
       << load.response.message;
+  // What the graph does as it shuts down is said too (rosconsole is down by then): the save
+  // that failed, and the run written.
+  const std::size_t save = output.find("[loop_detector] ~save_map " + unwritable + ": ");
+  ASSERT_NE(save, std::string::npos) << output;
+  const std::string said = output.substr(save, output.find('\n', save) - save);
+  EXPECT_EQ(said.find(": saved "), std::string::npos) << said;
+  RecordProperty("failed_save_at_exit", said);
+  EXPECT_FALSE(std::filesystem::exists(unwritable));
+  EXPECT_NE(output.find("[recorder] run written to " + run + ": "), std::string::npos) << output;
+  EXPECT_TRUE(std::filesystem::exists(run + "/trajectory.txt"));
 }
 
 }  // namespace
