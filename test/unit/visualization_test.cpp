@@ -1,12 +1,19 @@
 // The Visualizer's drawing (src/ros/): markers of a hand-built graph with two map segments, a
 // loop and a relocalization; the corrected path bending with its keyframes; the bounded cloud;
 // the tracking image's colours.
+#include <filesystem>
+#include <regex>
+#include <set>
+#include <string>
+
 #include <gtest/gtest.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <yaml-cpp/yaml.h>
 
 #include "map_cloud.h"
 #include "map_markers.h"
 #include "ros_conversions.h"
+#include "test_support.h"
 #include "tracking_image.h"
 #include "trajectory_paths.h"
 
@@ -231,6 +238,51 @@ TEST(TrackingImage, ColoursSayWhatTrackingMadeOfEachPoint) {
   EXPECT_FALSE(has_colour_near({40, 60}, ros_visualization::kOutlierColor));
   EXPECT_TRUE(has_colour_near({80, 60}, ros_visualization::kOutlierColor));
   EXPECT_TRUE(has_colour_near({120, 60}, ros_visualization::kUntrackedColor));
+}
+
+// The topics the package's sources advertise (advertise<...>("name", ...) in src/).
+std::set<std::string> AdvertisedTopics() {
+  std::set<std::string> topics;
+  const std::regex advertise(R"re(advertise<[^>]+>\(\s*"([a-z_]+)")re");
+  for (const auto& entry :
+       std::filesystem::recursive_directory_iterator(RepositoryRoot() + "/src")) {
+    if (entry.path().extension() != ".cpp") continue;
+    const std::string text = ReadTextFile(entry.path().string());
+    for (std::sregex_iterator it(text.begin(), text.end(), advertise), end; it != end; ++it) {
+      topics.insert((*it)[1]);
+    }
+  }
+  return topics;
+}
+
+// The shipped rviz view (issue 34: a view fixed 19 m out made a small scene a dot): it follows
+// the camera (orbit target base_link, the launch files' base frame) from at most 10 m, so that
+// MH01's first 10 s, whose keyframes lie within about 4 m, fill it as a large route does; the
+// fixed frame is the map; every display shows a topic the package publishes.
+TEST(RvizConfig, TheShippedViewFollowsTheCameraAndShowsThePackagesTopics) {
+  const YAML::Node root =
+      YAML::LoadFile(RepositoryRoot() + "/config/stereo_fabmap_slam.rviz")["Visualization Manager"];
+  ASSERT_TRUE(root.IsMap());
+  EXPECT_EQ(root["Global Options"]["Fixed Frame"].as<std::string>(), "map");
+  const YAML::Node view = root["Views"]["Current"];
+  EXPECT_EQ(view["Class"].as<std::string>(), "rviz/Orbit");
+  EXPECT_EQ(view["Target Frame"].as<std::string>(), "base_link");
+  EXPECT_GT(view["Distance"].as<double>(), 0.0);
+  EXPECT_LE(view["Distance"].as<double>(), 10.0);
+  const std::set<std::string> advertised = AdvertisedTopics();
+  ASSERT_GT(advertised.count("odometry"), 0u) << "the sources were read";
+  int topics = 0;
+  for (const YAML::Node& display : root["Displays"]) {
+    for (const char* key : {"Topic", "Marker Topic", "Image Topic"}) {
+      if (!display[key]) continue;
+      const std::string topic = display[key].as<std::string>();
+      ASSERT_FALSE(topic.empty());
+      EXPECT_EQ(advertised.count(topic.substr(topic[0] == '/' ? 1 : 0)), 1u)
+          << display["Name"].as<std::string>() << ": " << topic;
+      ++topics;
+    }
+  }
+  EXPECT_EQ(topics, 5) << "map cloud, markers, two paths, the tracking image";
 }
 
 }  // namespace
