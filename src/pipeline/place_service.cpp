@@ -38,7 +38,8 @@ PlaceService::PlaceService(PlaceStage stage, const geometry::StereoCamera& camer
         throw std::logic_error("PlaceService: its stage was made with it");
       }),
       stage_(std::move(stage)),
-      camera_(camera) {}
+      camera_(camera),
+      follows_map_(false) {}
 
 PlaceService::StartUp PlaceService::Start(const std::string& mode_name,
                                           const std::string& map_file) {
@@ -156,7 +157,7 @@ LoadedMapFile PlaceService::Load(const std::string& path) {
     // A service without a stage takes the map's camera; the mapping stage then refuses
     // keyframes of another.
     const LoadedMap loaded = StageFor(saved.camera).Load(saved, *camera_);
-    FollowMap(std::make_shared<MapSnapshot>(SnapshotOfSavedMap(saved)));
+    if (follows_map_) FollowMap(std::make_shared<MapSnapshot>(SnapshotOfSavedMap(saved)));
     return {file, loaded, saved};
   } catch (...) {
     if (fresh) {  // no stage made for a map refused: the next keyframe brings the camera

@@ -50,7 +50,8 @@ class PlaceService {
   // Makes the place stage for a camera (loads the vocabulary; throws io::InputError).
   using StageMaker = std::function<PlaceStage(const geometry::StereoCamera&)>;
   explicit PlaceService(StageMaker make_stage) : make_stage_(std::move(make_stage)) {}
-  // A service whose stage is made, for `camera`.
+  // A service whose stage is made, for `camera`, beside a mapping stage of its driver's own, whose
+  // map it is given with each call: it follows no map (a loaded file's is not rebuilt for it).
   PlaceService(PlaceStage stage, const geometry::StereoCamera& camera);
 
   // The mode and map file a user asked for at start ("": no file). A mode that is none, or a map
@@ -111,6 +112,7 @@ class PlaceService {
   std::optional<PlaceStage> stage_;
   std::optional<geometry::StereoCamera> camera_;  // the stage's
   std::shared_ptr<const MapSnapshot> followed_ = std::make_shared<MapSnapshot>();
+  bool follows_map_ = true;  // false beside the driver's own mapping stage (StereoSlam)
 };
 
 }  // namespace stereo_fabmap_slam::pipeline
