@@ -134,7 +134,8 @@ float HallScene::Shade(const Box& box, int face, const Eigen::Vector3f& point, f
   int u_axis, v_axis;
   FaceAxes(face, &u_axis, &v_axis);
   const Material& material = box.faces[face];
-  const float u = (point[u_axis] - box.min[u_axis]) * material.panels_per_metre_u;
+  float u = (point[u_axis] - box.min[u_axis]) * material.panels_per_metre_u;
+  if (material.mirror_u) u = material.panel_columns - u;
   // Textures stand upright on walls: image row 0 at the top.
   const float v = (box.max[v_axis] - point[v_axis]) * material.panels_per_metre_v;
   const int column = std::clamp(static_cast<int>(u), 0, material.panel_columns - 1);
@@ -181,6 +182,12 @@ std::vector<int> HallScene::ObstaclesInCone(const Eigen::Vector3f& origin,
 
 float HallScene::Trace(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
                        float pixel_angle, const std::vector<int>* obstacles) const {
+  return TraceRay(origin, direction, pixel_angle, obstacles, /*reflect=*/true);
+}
+
+float HallScene::TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+                          float pixel_angle, const std::vector<int>* obstacles,
+                          bool reflect) const {
   const Eigen::Vector3f inverse = direction.cwiseInverse();
   float best = std::numeric_limits<float>::infinity();
   int best_box = -1, best_face = 0;
@@ -224,7 +231,15 @@ float HallScene::Trace(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir
   if (best_box < 0) return 0.0f;
   const Eigen::Vector3f point = origin + best * direction;
   const float cos_incidence = std::abs(direction[best_face / 2]);
-  return Shade(boxes_[best_box], best_face, point, best, cos_incidence, pixel_angle);
+  const Material& material = boxes_[best_box].faces[best_face];
+  const float own = Shade(boxes_[best_box], best_face, point, best, cos_incidence, pixel_angle);
+  if (!reflect || material.reflectance <= 0.0f) return own;
+  // One bounce, against every obstacle (the cone's list holds for the primary rays only), with
+  // a footprint four times wider: a waxed floor shows a blurred image, not a mirror's.
+  Eigen::Vector3f mirrored = direction;
+  mirrored[best_face / 2] = -mirrored[best_face / 2];
+  const float reflected = TraceRay(point, mirrored, 4.0f * pixel_angle, nullptr, false);
+  return (1.0f - material.reflectance) * own + material.reflectance * reflected;
 }
 
 }  // namespace stereo_fabmap_slam::datasets

@@ -1,8 +1,12 @@
 #include "stereo_fabmap_slam/datasets/route.h"
 
 #include <cmath>
+#include <utility>
 
 namespace stereo_fabmap_slam::datasets {
+namespace {
+constexpr double kWalkingSpeed = 1.0;  // [m/s] along an office path
+}  // namespace
 
 std::optional<RouteKind> ParseRouteKind(const std::string& name) {
   if (name == "loop") return RouteKind::kLoop;
@@ -34,6 +38,9 @@ Route::Route(RouteKind kind, const HallOptions& hall)
   lap_time_ = kind == RouteKind::kFigure8 ? 1.25 * ellipse : ellipse;
 }
 
+Route::Route(RouteKind kind, RoundedPath path)
+    : kind_(kind), path_(std::move(path)), lap_time_(path_->length() / kWalkingSpeed) {}
+
 void Route::set_duration(double seconds) {
   if (kind_ == RouteKind::kKidnap) {
     cut_time_ = 0.6 * seconds;
@@ -45,7 +52,11 @@ Eigen::Isometry3d Route::ContinuousPose(double t) const {
   const double w = 2 * M_PI / lap_time_;
   const double theta = w * t;
   Eigen::Vector3d position, velocity;
-  if (kind_ == RouteKind::kFigure8) {
+  if (path_) {
+    const double walked = kWalkingSpeed * t;
+    position << path_->Position(walked), 0;
+    velocity << kWalkingSpeed * path_->Direction(walked), 0;
+  } else if (kind_ == RouteKind::kFigure8) {
     // Gerono's lemniscate: x = a sin(theta), y = b sin(2 theta) / 1.2.
     position = {centre_.x() + semi_x_ * std::sin(theta),
                 centre_.y() + semi_y_ * std::sin(2 * theta) / 1.2, 0};

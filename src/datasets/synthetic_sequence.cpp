@@ -1,10 +1,12 @@
 #include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <future>
 #include <iomanip>
+#include <optional>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
@@ -17,14 +19,33 @@ namespace {
 
 HallScene MakeScene(const SyntheticSequenceOptions& options) {
   options.Validate();
+  if (options.scene == "office") return OfficeFloor::Scene(options.office, options.seed);
   return HallScene(options.hall, TextureLibrary::Load(options.photo_folder), options.seed);
 }
 
 Route MakeRoute(const SyntheticSequenceOptions& options) {
-  Route route(*ParseRouteKind(options.route), options.hall);
+  const RouteKind kind = *ParseRouteKind(options.route);
+  Route route = options.scene == "office" ? Route(kind, OfficeFloor::Path(kind, options.office))
+                                          : Route(kind, options.hall);
   route.set_duration(options.seconds);
   return route;
 }
+
+// Auto exposure: the gain that brings the mean radiance to mid grey, reached with a 0.3 s time
+// constant and kept within the range of a real sensor's gain.
+class AutoExposure {
+ public:
+  double Next(const cv::Mat& radiance, double dt) {
+    const double mean = std::max(1.0, cv::mean(radiance)[0]);
+    const double target = std::clamp(kMidGrey / mean, 0.4, 3.0);
+    gain_ = gain_ ? *gain_ + (target - *gain_) * (1.0 - std::exp(-dt / kTimeConstant)) : target;
+    return *gain_;
+  }
+
+ private:
+  static constexpr double kMidGrey = 118, kTimeConstant = 0.3;
+  std::optional<double> gain_;
+};
 
 // Pixels from the rendered radiance: exposure gain, noise, rounding to 8 bits.
 cv::Mat Develop(const cv::Mat& radiance, double gain, double sigma, std::uint64_t noise_seed) {
@@ -42,7 +63,21 @@ cv::Mat Develop(const cv::Mat& radiance, double gain, double sigma, std::uint64_
 
 }  // namespace
 
+SyntheticSequenceOptions SyntheticSequenceOptions::ForScene(const std::string& scene) {
+  SyntheticSequenceOptions options;
+  options.scene = scene;
+  options.auto_exposure = scene == "office";
+  return options;
+}
+
 void SyntheticSequenceOptions::Validate() const {
+  if (scene != "hall" && scene != "office")
+    throw std::invalid_argument("unknown scene '" + scene + "' (hall, office)");
+  if (scene == "office") office.Validate();
+  if (resolution.width < 160 || resolution.height < 120 || resolution.width > 4096 ||
+      resolution.height > 4096) {
+    throw std::invalid_argument("resolution must lie between 160x120 and 4096x4096");
+  }
   if (!ParseRouteKind(route)) {
     throw std::invalid_argument("unknown route '" + route + "' (loop, figure8, kidnap)");
   }
@@ -52,7 +87,7 @@ void SyntheticSequenceOptions::Validate() const {
     throw std::invalid_argument("noise sigma must lie in [0, 50)");
 }
 
-camera::StereoCalibration SyntheticSequence::Rig(bool distortion) {
+camera::StereoCalibration SyntheticSequence::Rig(bool distortion, cv::Size resolution) {
   // Body x forward, y left, z up; camera x right, y down, z forward.
   Eigen::Matrix3d body_from_camera;
   body_from_camera << 0, 0, 1, -1, 0, 0, 0, -1, 0;
@@ -61,6 +96,15 @@ camera::StereoCalibration SyntheticSequence::Rig(bool distortion) {
   rig.left.rate_hz = rig.right.rate_hz = 20;
   rig.left.fx = 458.654, rig.left.fy = 457.296, rig.left.cx = 367.215, rig.left.cy = 248.375;
   rig.right.fx = 457.587, rig.right.fy = 456.134, rig.right.cx = 379.999, rig.right.cy = 255.238;
+  if (resolution != rig.left.resolution) {
+    const double scale = static_cast<double>(resolution.width) / rig.left.resolution.width;
+    for (camera::CameraCalibration* camera : {&rig.left, &rig.right}) {
+      camera->fx *= scale, camera->fy *= scale;
+      camera->cx = 0.5 * resolution.width + (camera->cx - 0.5 * camera->resolution.width) * scale;
+      camera->cy = 0.5 * resolution.height + (camera->cy - 0.5 * camera->resolution.height) * scale;
+      camera->resolution = resolution;
+    }
+  }
   rig.left.distortion =
       distortion ? std::vector<double>{-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05}
                  : std::vector<double>{0, 0, 0, 0};
@@ -89,7 +133,7 @@ int SyntheticSequence::frame_count() const {
 void SyntheticSequence::Write(const std::string& directory,
                               const std::function<void(int, int)>& progress) const {
   const std::string mav0 = directory + "/mav0";
-  const camera::StereoCalibration rig = Rig(options_.distortion);
+  const camera::StereoCalibration rig = Rig(options_.distortion, options_.resolution);
   const camera::CameraCalibration* cameras[2] = {&rig.left, &rig.right};
   const CameraRenderer renderers[2] = {CameraRenderer(rig.left), CameraRenderer(rig.right)};
   std::ofstream lists[2];
@@ -103,6 +147,7 @@ void SyntheticSequence::Write(const std::string& directory,
   }
 
   const int frames = frame_count();
+  AutoExposure exposure[2];
   for (int k = 0; k < frames; ++k) {
     const std::int64_t stamp = kStartNs + k * kFrameNs;
     const double t = k * kFrameNs * 1e-9;
@@ -121,8 +166,9 @@ void SyntheticSequence::Write(const std::string& directory,
                      3.0;
         }
       }
-      const double gain =
+      double gain =
           options_.exposure_changes ? 1.0 + 0.2 * std::sin(2 * M_PI * t / 6.0 + 0.8 * c) : 1.0;
+      if (options_.auto_exposure) gain *= exposure[c].Next(radiance, kFrameNs * 1e-9);
       const cv::Mat image =
           Develop(radiance, gain, options_.noise_sigma,
                   options_.seed * 1000003ULL + static_cast<std::uint64_t>(2 * k + c));
@@ -155,20 +201,26 @@ void SyntheticSequence::Write(const std::string& directory,
   camera::WriteStereoCalibrationYaml(rig, directory + "/stereo_calibration.yaml");
 
   std::ofstream about(mav0 + "/synthetic.yaml");
-  about << std::setprecision(10) << "route: " << options_.route << "\nseconds: " << options_.seconds
-        << "\nseed: " << options_.seed << "\nframes: " << frames
-        << "\nlap_time: " << route_.lap_time() << "\nnoise_sigma: " << options_.noise_sigma
+  about << std::setprecision(10) << "scene: " << options_.scene << "\nroute: " << options_.route
+        << "\nseconds: " << options_.seconds << "\nseed: " << options_.seed
+        << "\nframes: " << frames << "\nlap_time: " << route_.lap_time()
+        << "\nnoise_sigma: " << options_.noise_sigma
         << "\ndistortion: " << (options_.distortion ? "true" : "false")
         << "\nexposure_changes: " << (options_.exposure_changes ? "true" : "false")
-        << "\nmotion_blur: " << (options_.motion_blur ? "true" : "false") << "\n";
+        << "\nmotion_blur: " << (options_.motion_blur ? "true" : "false")
+        << "\nauto_exposure: " << (options_.auto_exposure ? "true" : "false")
+        << "\nresolution: " << options_.resolution.width << "x" << options_.resolution.height
+        << "\n";
   if (route_.cut_time())
     about << "cut_time: " << *route_.cut_time() << "\njump: " << route_.jump() << "\n";
   about << "revisits: [";  // seconds after the first image when the route returns to a known place
   const std::vector<double> revisits = route_.Revisits((frames - 1) * kFrameNs * 1e-9);
   for (std::size_t r = 0; r < revisits.size(); ++r) about << (r ? ", " : "") << revisits[r];
   about << "]\n";
-  about << "photos:\n";
-  for (const Texture& texture : scene_.textures()) about << "  - " << texture.name << "\n";
+  if (options_.scene == "hall") {
+    about << "photos:\n";
+    for (const Texture& texture : scene_.textures()) about << "  - " << texture.name << "\n";
+  }
 }
 
 }  // namespace stereo_fabmap_slam::datasets

@@ -14,6 +14,11 @@ struct Material {
   std::vector<int> panel_textures;  // row-major, panel_columns x panel_rows, into textures()
   int panel_columns = 1, panel_rows = 1;
   float shade = 1.0f;  // per-face brightness, so that faces meeting at an edge differ
+  // Panels run along the face's horizontal axis in its direction; a face seen from the side where
+  // that axis points to the viewer's left is mirrored, so that text on it reads left to right.
+  bool mirror_u = false;
+  // A glossy floor: this fraction of what it shows is the blurred mirror image of the scene.
+  float reflectance = 0.0f;
   // Derived when the scene is built: panels per metre along the face's two axes.
   float panels_per_metre_u = 0, panels_per_metre_v = 0;
 };
@@ -60,6 +65,8 @@ class HallScene {
 
  private:
   void DeriveScales();  // fills Material::panels_per_metre_*
+  float TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float pixel_angle,
+                 const std::vector<int>* obstacles, bool reflect) const;
   float Shade(const Box& box, int face, const Eigen::Vector3f& point, float distance,
               float cos_incidence, float pixel_angle) const;
 

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/datasets/hall_scene.h"
+#include "stereo_fabmap_slam/datasets/rounded_path.h"
 
 namespace stereo_fabmap_slam::datasets {
 
@@ -19,12 +20,15 @@ enum class RouteKind {
 std::optional<RouteKind> ParseRouteKind(const std::string& name);  // "loop", "figure8", "kidnap"
 const char* RouteKindName(RouteKind kind);
 
-// A smooth 6-DoF body trajectory at walking speed (about 1 m/s) inside the hall's free ellipse:
-// body x forward, y left, z up, looking along the direction of travel with gentle yaw, pitch and
-// roll oscillations and a slowly changing height.
+// A smooth 6-DoF body trajectory at walking speed (about 1 m/s): body x forward, y left, z up,
+// looking along the direction of travel with gentle yaw, pitch and roll oscillations and a slowly
+// changing height. In the hall it follows an ellipse or a lemniscate inside the free ellipse; on
+// an office floor, a path along the corridors.
 class Route {
  public:
   Route(RouteKind kind, const HallOptions& hall);
+  // Along `path` at 1 m/s, lap after lap; the kidnap route is `path` cut as in the hall.
+  Route(RouteKind kind, RoundedPath path);
 
   Eigen::Isometry3d BodyPose(double t) const;  // T_world_body at t seconds
   // The kidnap route's cut: from `cut_time` on, the camera continues from where it was at
@@ -43,8 +47,9 @@ class Route {
   Eigen::Isometry3d ContinuousPose(double t) const;
 
   RouteKind kind_;
+  std::optional<RoundedPath> path_;  // the office's corridors; empty in the hall
   Eigen::Vector2d centre_;
-  double semi_x_, semi_y_;
+  double semi_x_ = 0, semi_y_ = 0;
   double lap_time_;
   std::optional<double> cut_time_;
   double jump_ = 0;

@@ -6,11 +6,13 @@
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/datasets/hall_scene.h"
+#include "stereo_fabmap_slam/datasets/office_floor.h"
 #include "stereo_fabmap_slam/datasets/route.h"
 
 namespace stereo_fabmap_slam::datasets {
 
 struct SyntheticSequenceOptions {
+  std::string scene = "hall";  // hall (photographs on the walls) or office (OfficeFloor)
   std::string route = "loop";  // loop, figure8, kidnap
   double seconds = 40.0;
   std::uint64_t seed = 1;         // the hall (photos, obstacles) and the image noise
@@ -18,8 +20,17 @@ struct SyntheticSequenceOptions {
   bool distortion = true;         // EuRoC's radial-tangential lens distortion (else ideal pinhole)
   bool exposure_changes = false;  // slow, independent gain changes of the two cameras
   bool motion_blur = false;       // average over a 10 ms exposure
-  std::string photo_folder = "/usr/share/doc/opencv-doc/examples/data";
+  // Each camera's gain follows the brightness of what it sees (0.3 s time constant), as a real
+  // camera's auto exposure does when a corridor of lights or a dark door fills the view. On by
+  // default in the office (see ForScene).
+  bool auto_exposure = false;
+  cv::Size resolution{752, 480};  // EuRoC's; the same field of view at any other size
+  std::string photo_folder = "/usr/share/doc/opencv-doc/examples/data";  // the hall's
   HallOptions hall;
+  OfficeOptions office;
+
+  // The defaults of a scene: the office turns auto exposure on.
+  static SyntheticSequenceOptions ForScene(const std::string& scene);
 
   void Validate() const;  // throws std::invalid_argument
 };
@@ -37,8 +48,10 @@ class SyntheticSequence {
              const std::function<void(int, int)>& progress = nullptr) const;
 
   // The EuRoC-like stereo rig: 752 x 480 at 20 Hz, EuRoC's intrinsics (focal ~458 px) and, if
-  // asked, its distortion; baseline 0.11 m; cameras looking along the body's x axis.
-  static camera::StereoCalibration Rig(bool distortion);
+  // asked, its distortion; baseline 0.11 m; cameras looking along the body's x axis. Another
+  // `resolution` scales the focal lengths with the width (the same horizontal field of view,
+  // square pixels) and keeps the principal point's offset from the centre in proportion.
+  static camera::StereoCalibration Rig(bool distortion, cv::Size resolution = {752, 480});
   static constexpr std::int64_t kStartNs = 1'500'000'000'000'000'000;  // first image stamp
   static constexpr std::int64_t kFrameNs = 50'000'000;                 // 20 Hz
 
