@@ -1,6 +1,8 @@
 #include "stereo_fabmap_slam/evaluation/place_recognition_precision_recall.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace stereo_fabmap_slam::evaluation {
 
@@ -63,6 +65,20 @@ PlacePrecisionRecallPoint PointAtThreshold(const std::vector<PlaceQueryResult>& 
   return point;
 }
 
+double CandidateRecall(const std::vector<PlaceQueryResult>& results, int k) {
+  if (k < 1 || k > PlaceQueryResult::kRankedCandidates) {
+    throw std::invalid_argument("candidate recall: K must lie in [1, " +
+                                std::to_string(PlaceQueryResult::kRankedCandidates) + "]");
+  }
+  int with_true_match = 0, found = 0;
+  for (const PlaceQueryResult& result : results) {
+    if (!result.has_true_match) continue;
+    ++with_true_match;
+    found += result.true_candidate_rank >= 0 && result.true_candidate_rank < k ? 1 : 0;
+  }
+  return with_true_match > 0 ? static_cast<double>(found) / with_true_match : 0.0;
+}
+
 PlaceRecognitionSummary SummarizePlaceRecognition(const std::vector<PlaceQueryResult>& results) {
   PlaceRecognitionSummary summary;
   for (const PlaceQueryResult& result : results) {
@@ -73,6 +89,9 @@ PlaceRecognitionSummary SummarizePlaceRecognition(const std::vector<PlaceQueryRe
   const std::vector<PlacePrecisionRecallPoint> curve = PrecisionRecallCurve(results);
   summary.recall_at_full_precision = RecallAtFullPrecision(curve);
   summary.auc = AreaUnderCurve(curve);
+  summary.candidate_recall_at_1 = CandidateRecall(results, 1);
+  summary.candidate_recall_at_3 = CandidateRecall(results, 3);
+  summary.candidate_recall_at_5 = CandidateRecall(results, 5);
   return summary;
 }
 

@@ -1,5 +1,8 @@
 #include "stereo_fabmap_slam/evaluation/place_recognition_queries.h"
 
+#include <algorithm>
+#include <functional>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -33,6 +36,29 @@ PlaceQueryResult NewResult(const PlaceRecognitionFrames& frames, const PlaceGrou
   return result;
 }
 
+// The first of the best-ranked candidates (`scores` over `count` candidates, `is_candidate`
+// and `is_true` by index) that is true: its rank, or -1 beyond kRankedCandidates. Equal scores
+// rank in index order, as the loop detector orders them.
+int TrueCandidateRank(int count, const std::function<double(int)>& score,
+                      const std::function<bool(int)>& is_candidate,
+                      const std::function<bool(int)>& is_true) {
+  std::vector<int> ranked;
+  for (int i = 0; i < count; ++i) {
+    if (is_candidate(i)) ranked.push_back(i);
+  }
+  const auto better = [&](int a, int b) {
+    return score(a) > score(b) || (score(a) == score(b) && a < b);
+  };
+  const std::size_t kept =
+      std::min<std::size_t>(ranked.size(), PlaceQueryResult::kRankedCandidates);
+  std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(kept),
+                    ranked.end(), better);
+  for (std::size_t r = 0; r < kept; ++r) {
+    if (is_true(ranked[r])) return static_cast<int>(r);
+  }
+  return -1;
+}
+
 }  // namespace
 
 const char* PlacesModeName(PlacesMode mode) {
@@ -51,15 +77,14 @@ ExcludedPairs CountExcludedPairs(const PlaceRecognitionFrames& frames,
   return excluded;
 }
 
-std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& frames,
-                                               const PlaceGroundTruth& truth, PlacesMode mode,
-                                               double match_log_odds,
-                                               place_recognition::FabMap* fabmap,
-                                               const QueryProgress& progress) {
+FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& truth,
+                               const FabMapQueryOptions& options, place_recognition::FabMap* fabmap,
+                               const QueryProgress& progress) {
   CheckSizes(frames, truth);
   if (fabmap->places().size() != 0) throw std::invalid_argument("RunFabMapQueries: a used map");
   std::vector<std::vector<int>> members;  // per place: its frames, in time order
-  std::vector<PlaceQueryResult> results;
+  FabMapQueries run;
+  std::vector<PlaceQueryResult>& results = run.results;
   for (int j = 0; j < frames.size(); ++j) {
     PlaceQueryResult result = NewResult(frames, truth, j);
     const std::vector<int>& words = frames.word_sets[static_cast<std::size_t>(j)];
@@ -70,6 +95,25 @@ std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& fra
     if (result.has_candidates) {
       const place_recognition::FabMapResult restricted = fabmap->Compare(words, candidates);
       result.new_place_probability = restricted.new_place;
+      // A place is a true answer when one of its frames outside the window shows the query's
+      // place (frames are in time order: those outside the window come first).
+      const auto place_is_true = [&](int place) {
+        for (const int frame : members[static_cast<std::size_t>(place)]) {
+          if (!frames.IsCandidate(frame, j)) break;
+          if (truth.Same(frame, j)) return true;
+        }
+        return false;
+      };
+      if (result.has_true_match) {
+        result.true_candidate_rank = TrueCandidateRank(
+            static_cast<int>(members.size()),
+            [&](int p) { return restricted.posterior[static_cast<std::size_t>(p)]; },
+            [&](int p) {
+              return candidates[static_cast<std::size_t>(p)] &&
+                     restricted.posterior[static_cast<std::size_t>(p)] >= options.candidate_floor;
+            },
+            place_is_true);
+      }
       if (restricted.best >= 0) {
         result.best_place = restricted.best;
         result.score = restricted.best_log_odds;
@@ -83,26 +127,63 @@ std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& fra
         }
       }
     }
-    if (mode == PlacesMode::kUpdate) {
+    if (options.mode == PlacesMode::kUpdate) {
       int place = -1;
       fabmap->Add(words, &place);
       result.declared_new = place == static_cast<int>(members.size());
       if (result.declared_new) members.emplace_back();
       members[static_cast<std::size_t>(place)].push_back(j);
+      run.place_of_frame.push_back(place);
     } else {
       if (!members.empty()) {
         const place_recognition::FabMapResult full = fabmap->Compare(words);
-        result.declared_new = full.best_log_odds < match_log_odds;
+        result.declared_new = full.best_log_odds < options.match_log_odds;
       } else {
         result.declared_new = true;
       }
-      fabmap->AddPlace(words);
+      run.place_of_frame.push_back(fabmap->AddPlace(words));
       members.push_back({j});
     }
     results.push_back(result);
     if (progress) progress(j + 1, frames.size());
   }
-  return results;
+  return run;
+}
+
+PlaceMapShape DescribePlaces(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& truth,
+                             const std::vector<int>& place_of_frame) {
+  CheckSizes(frames, truth);
+  if (place_of_frame.size() != frames.times.size())
+    throw std::invalid_argument("DescribePlaces: one place per frame is needed");
+  PlaceMapShape shape;
+  std::vector<int> frames_of_place;
+  for (const int place : place_of_frame) {
+    if (place < 0) throw std::invalid_argument("DescribePlaces: a frame without a place");
+    if (place >= static_cast<int>(frames_of_place.size()))
+      frames_of_place.resize(static_cast<std::size_t>(place) + 1, 0);
+    ++frames_of_place[static_cast<std::size_t>(place)];
+  }
+  for (const int count : frames_of_place) shape.places += count > 0 ? 1 : 0;
+  if (!frames_of_place.empty())
+    shape.largest_place_frames = *std::max_element(frames_of_place.begin(), frames_of_place.end());
+  shape.largest_place_share =
+      frames.size() > 0 ? static_cast<double>(shape.largest_place_frames) / frames.size() : 0.0;
+  double places_sum = 0;
+  for (int j = 0; j < frames.size(); ++j) {
+    bool revisited = false;
+    for (int i = 0; i < j && !revisited; ++i)
+      revisited = frames.IsCandidate(i, j) && truth.Same(i, j);
+    if (!revisited) continue;
+    std::set<int> places = {place_of_frame[static_cast<std::size_t>(j)]};
+    for (int i = 0; i < frames.size(); ++i) {
+      if (truth.Same(i, j)) places.insert(place_of_frame[static_cast<std::size_t>(i)]);
+    }
+    ++shape.revisited_locations;
+    places_sum += static_cast<double>(places.size());
+  }
+  shape.places_per_revisited_location =
+      shape.revisited_locations > 0 ? places_sum / shape.revisited_locations : 0.0;
+  return shape;
 }
 
 std::vector<PlaceQueryResult> RunTfIdfQueries(const PlaceRecognitionFrames& frames,
@@ -124,6 +205,12 @@ std::vector<PlaceQueryResult> RunTfIdfQueries(const PlaceRecognitionFrames& fram
       }
       result.best_frame = result.best_place;
       result.is_true = result.best_place >= 0 && truth.Same(result.best_place, j);
+      if (result.has_true_match) {
+        result.true_candidate_rank = TrueCandidateRank(
+            j, [&](int i) { return scores[static_cast<std::size_t>(i)]; },
+            [&](int i) { return frames.IsCandidate(i, j); },
+            [&](int i) { return truth.Same(i, j); });
+      }
     }
     index->Add(words);
     results.push_back(result);

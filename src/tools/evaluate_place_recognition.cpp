@@ -70,7 +70,12 @@ constexpr char kUsage[] =
     "                     place_recognition_queries.csv (one row per method, mode and query)\n"
     "  --json             print one summary object instead of the table\n"
     "FAB-MAP's answers are ranked by their log odds against a new place; precision and recall\n"
-    "at fabmap.match_log_odds (the default threshold, 0) are reported beside the curve.\n";
+    "at fabmap.match_log_odds (the default threshold, 0) are reported beside the curve.\n"
+    "What the loop detector needs: candidate recall @1/3/5 (of the queries with a true match,\n"
+    "those whose true place is among FAB-MAP's K best candidates of posterior at least\n"
+    "loop_detection.min_probability, which the detector verifies geometrically; tf-idf: its K\n"
+    "best images); and for FAB-MAP's places the count, the largest place's share of all frames\n"
+    "and the mean number of places among the frames of a revisited location (1 is ideal).\n";
 
 double NowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -210,6 +215,7 @@ struct Run {
   evaluation::PlaceRecognitionSummary summary;
   // FAB-MAP: matches declared at the configured fabmap.match_log_odds; tf-idf has no default.
   std::optional<evaluation::PlacePrecisionRecallPoint> at_default;
+  std::optional<evaluation::PlaceMapShape> shape;  // FAB-MAP: how the frames fell into places
   double seconds = 0;
 };
 
@@ -230,10 +236,11 @@ void WriteOutputs(const std::string& directory, const Input& input,
   std::string summary =
       "method,mode,queries,queries_with_true_match,excluded_pairs,excluded_same_place_pairs,"
       "recall_at_100_precision,auc,declared_new_places,seconds,default_threshold,"
-      "precision_at_default,recall_at_default\n";
+      "precision_at_default,recall_at_default,candidate_recall_at_1,candidate_recall_at_3,"
+      "candidate_recall_at_5,places,largest_place_share,places_per_revisited_location\n";
   std::string queries =
       "method,mode,query,image,time,best_place,best_frame,best_image,score,"
-      "new_place_probability,declared_new,has_true_match,is_true\n";
+      "new_place_probability,declared_new,has_true_match,is_true,true_candidate_rank\n";
   for (const Run& run : runs) {
     const std::string prefix = run.method + "," + run.mode + ",";
     for (const evaluation::PlacePrecisionRecallPoint& point : run.curve) {
@@ -249,7 +256,15 @@ void WriteOutputs(const std::string& directory, const Input& input,
                Number(run.seconds) + "," +
                AtDefault(run, &evaluation::PlacePrecisionRecallPoint::threshold) + "," +
                AtDefault(run, &evaluation::PlacePrecisionRecallPoint::precision) + "," +
-               AtDefault(run, &evaluation::PlacePrecisionRecallPoint::recall) + "\n";
+               AtDefault(run, &evaluation::PlacePrecisionRecallPoint::recall) + "," +
+               Number(run.summary.candidate_recall_at_1) + "," +
+               Number(run.summary.candidate_recall_at_3) + "," +
+               Number(run.summary.candidate_recall_at_5) + "," +
+               (run.shape ? std::to_string(run.shape->places) + "," +
+                                Number(run.shape->largest_place_share) + "," +
+                                Number(run.shape->places_per_revisited_location)
+                          : ",,") +
+               "\n";
     for (const evaluation::PlaceQueryResult& result : run.results) {
       const std::size_t q = static_cast<std::size_t>(result.query);
       queries +=
@@ -260,7 +275,8 @@ void WriteOutputs(const std::string& directory, const Input& input,
           "," + (result.best_place >= 0 ? Number(result.score) : "") + "," +
           Number(result.new_place_probability) + "," +
           (run.method == "fabmap" ? (result.declared_new ? "1" : "0") : "") + "," +
-          (result.has_true_match ? "1" : "0") + "," + (result.is_true ? "1" : "0") + "\n";
+          (result.has_true_match ? "1" : "0") + "," + (result.is_true ? "1" : "0") + "," +
+          (result.has_true_match ? std::to_string(result.true_candidate_rank) : "") + "\n";
     }
   }
   WriteText(directory + "/place_recognition_pr.csv", pr);
@@ -283,7 +299,16 @@ std::string SummaryJson(const std::string& source, const Input& input,
         run.mode + "\", \"queries\": " + std::to_string(run.summary.queries) +
         ", \"queries_with_true_match\": " + std::to_string(run.summary.queries_with_true_match) +
         ", \"recall_at_100_precision\": " + Number(run.summary.recall_at_full_precision) +
-        ", \"auc\": " + Number(run.summary.auc);
+        ", \"auc\": " + Number(run.summary.auc) +
+        ", \"candidate_recall_at_1\": " + Number(run.summary.candidate_recall_at_1) +
+        ", \"candidate_recall_at_3\": " + Number(run.summary.candidate_recall_at_3) +
+        ", \"candidate_recall_at_5\": " + Number(run.summary.candidate_recall_at_5);
+    if (run.shape) {
+      json += ", \"places\": " + std::to_string(run.shape->places) +
+              ", \"largest_place_share\": " + Number(run.shape->largest_place_share) +
+              ", \"places_per_revisited_location\": " +
+              Number(run.shape->places_per_revisited_location);
+    }
     if (run.method == "fabmap")
       json += ", \"declared_new_places\": " + std::to_string(run.summary.declared_new);
     if (run.at_default) {
@@ -301,19 +326,33 @@ void PrintTable(const Input& input, const evaluation::ExcludedPairs& excluded,
   std::printf("%d frames; window %s %s: %ld pairs excluded (%ld of them the same place)\n",
               input.frames.size(), Number(input.frames.window).c_str(), input.window_unit.c_str(),
               excluded.pairs, excluded.same_place);
-  std::printf("%-8s %-10s %8s %11s %11s %8s %10s %8s %13s\n", "method", "mode", "queries",
-              "true_match", "recall@P1", "AUC", "new_places", "time_s", "P/R@default");
+  std::printf("%-8s %-10s %8s %11s %11s %8s %10s %8s %13s %17s %7s %8s %10s\n", "method", "mode",
+              "queries", "true_match", "recall@P1", "AUC", "new_places", "time_s", "P/R@default",
+              "cand@1/3/5", "places", "largest", "per_locat.");
   for (const Run& run : runs) {
     char at_default[32] = "-";
     if (run.at_default) {
       std::snprintf(at_default, sizeof(at_default), "%.1f/%.1f%%",
                     100.0 * run.at_default->precision, 100.0 * run.at_default->recall);
     }
-    std::printf("%-8s %-10s %8d %11d %10.1f%% %8.3f %10s %8.2f %13s\n", run.method.c_str(),
-                run.mode.c_str(), run.summary.queries, run.summary.queries_with_true_match,
-                100.0 * run.summary.recall_at_full_precision, run.summary.auc,
+    char candidates[32];
+    std::snprintf(candidates, sizeof(candidates), "%.0f/%.0f/%.0f%%",
+                  100.0 * run.summary.candidate_recall_at_1,
+                  100.0 * run.summary.candidate_recall_at_3,
+                  100.0 * run.summary.candidate_recall_at_5);
+    char places[16] = "-", largest[16] = "-", per_location[16] = "-";
+    if (run.shape) {
+      std::snprintf(places, sizeof(places), "%d", run.shape->places);
+      std::snprintf(largest, sizeof(largest), "%.1f%%", 100.0 * run.shape->largest_place_share);
+      std::snprintf(per_location, sizeof(per_location), "%.2f",
+                    run.shape->places_per_revisited_location);
+    }
+    std::printf("%-8s %-10s %8d %11d %10.1f%% %8.3f %10s %8.2f %13s %17s %7s %8s %10s\n",
+                run.method.c_str(), run.mode.c_str(), run.summary.queries,
+                run.summary.queries_with_true_match, 100.0 * run.summary.recall_at_full_precision,
+                run.summary.auc,
                 run.method == "fabmap" ? std::to_string(run.summary.declared_new).c_str() : "-",
-                run.seconds, at_default);
+                run.seconds, at_default, candidates, places, largest, per_location);
   }
 }
 
@@ -390,22 +429,27 @@ int main(int argc, char** argv) {
 
     std::vector<Run> runs;
     for (const evaluation::PlacesMode mode : modes) {
-      Run run{"fabmap", evaluation::PlacesModeName(mode), {}, {}, {}, {}, 0};
+      Run run{"fabmap", evaluation::PlacesModeName(mode), {}, {}, {}, {}, {}, 0};
       const double run_start = NowSeconds();
       place_recognition::FabMap fabmap(tree, place_options.fabmap, training);
-      run.results = evaluation::RunFabMapQueries(
-          input.frames, *input.truth, mode, place_options.fabmap.match_log_odds, &fabmap,
-          [&](int done, int total) {
+      evaluation::FabMapQueryOptions query_options;
+      query_options.mode = mode;
+      query_options.match_log_odds = place_options.fabmap.match_log_odds;
+      query_options.candidate_floor = options.loop_detection.min_probability;
+      evaluation::FabMapQueries queries = evaluation::RunFabMapQueries(
+          input.frames, *input.truth, query_options, &fabmap, [&](int done, int total) {
             if (done % 500 == 0 || done == total)
               std::fprintf(stderr, "FAB-MAP (%s): %d / %d queries\n", run.mode.c_str(), done,
                            total);
           });
       run.seconds = NowSeconds() - run_start;
+      run.results = std::move(queries.results);
+      run.shape = evaluation::DescribePlaces(input.frames, *input.truth, queries.place_of_frame);
       runs.push_back(std::move(run));
     }
     {
       // tf-idf has no places to update: one image each, under both modes' queries.
-      Run run{"tfidf", "per-image", {}, {}, {}, {}, 0};
+      Run run{"tfidf", "per-image", {}, {}, {}, {}, {}, 0};
       const double run_start = NowSeconds();
       std::vector<std::vector<int>> training_words;
       for (int i = 0; i < training.size(); ++i) {

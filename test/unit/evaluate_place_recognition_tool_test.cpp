@@ -134,7 +134,23 @@ TEST_F(RenderedTwice, SequenceWithPosesFindsEveryRevisit) {
     // differ; one query in ten may go to a look-alike view of the hall's repeated photos.
     EXPECT_GE(Value(summary, run, "recall_at_100_precision"), 0.9);
     EXPECT_GE(Value(summary, run, "auc"), 0.9);
+    // The twin is the best candidate as often as it is the accepted answer, and a longer list
+    // of candidates can only hold it more often.
+    EXPECT_GE(Value(summary, run, "candidate_recall_at_1"), 0.9);
+    EXPECT_LE(Value(summary, run, "candidate_recall_at_1"),
+              Value(summary, run, "candidate_recall_at_3"));
+    EXPECT_LE(Value(summary, run, "candidate_recall_at_3"),
+              Value(summary, run, "candidate_recall_at_5"));
   }
+  // One place per image: 80 places, none larger than one frame; a revisited location is a
+  // frame, its twin and the neighbours within its view (tau 0.5): several places. Updating
+  // merges them.
+  EXPECT_EQ(Value(summary, "fabmap/per-image", "places"), 80);
+  EXPECT_DOUBLE_EQ(Value(summary, "fabmap/per-image", "largest_place_share"), 1.0 / 80);
+  EXPECT_GE(Value(summary, "fabmap/per-image", "places_per_revisited_location"), 2.0);
+  EXPECT_LT(Value(summary, "fabmap/update", "places"), 80);
+  EXPECT_LT(Value(summary, "fabmap/update", "places_per_revisited_location"),
+            Value(summary, "fabmap/per-image", "places_per_revisited_location"));
   const std::string pr = ReadTextFile(out + "/place_recognition_pr.csv");
   EXPECT_EQ(pr.rfind("method,mode,threshold,precision,recall,declared,correct\n", 0), 0u);
   EXPECT_NE(ReadTextFile(out + "/place_recognition_queries.csv").find("\nfabmap,update,"),

@@ -280,8 +280,12 @@ TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
     SCOPED_TRACE(evaluation::PlacesModeName(mode));
     place_recognition::FabMapOptions options;
     place_recognition::FabMap fabmap(tree, options);
-    const std::vector<PlaceQueryResult> results =
-        evaluation::RunFabMapQueries(passes.frames, truth, mode, options.match_log_odds, &fabmap);
+    evaluation::FabMapQueryOptions query_options;
+    query_options.mode = mode;
+    query_options.match_log_odds = options.match_log_odds;
+    const evaluation::FabMapQueries queries =
+        evaluation::RunFabMapQueries(passes.frames, truth, query_options, &fabmap);
+    const std::vector<PlaceQueryResult>& results = queries.results;
     ASSERT_EQ(results.size(), 20u);
     for (int j = 0; j < 20; ++j) {
       const PlaceQueryResult& result = results[static_cast<std::size_t>(j)];
@@ -303,12 +307,34 @@ TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
     EXPECT_EQ(summary.queries_with_true_match, 10);
     EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 1.0);
     EXPECT_DOUBLE_EQ(summary.auc, 1.0);
-    // Updating: the first pass makes ten places, the revisits update them.
+    // Every revisit's place is FAB-MAP's best candidate.
+    EXPECT_DOUBLE_EQ(summary.candidate_recall_at_1, 1.0);
+    EXPECT_DOUBLE_EQ(summary.candidate_recall_at_5, 1.0);
+    // A floor above every posterior leaves no candidate to verify.
+    query_options.candidate_floor = 1.01;
+    place_recognition::FabMap floored(tree, options);
+    EXPECT_DOUBLE_EQ(
+        evaluation::SummarizePlaceRecognition(
+            evaluation::RunFabMapQueries(passes.frames, truth, query_options, &floored).results)
+            .candidate_recall_at_5,
+        0.0);
+    const evaluation::PlaceMapShape shape =
+        evaluation::DescribePlaces(passes.frames, truth, queries.place_of_frame);
+    EXPECT_EQ(shape.revisited_locations, 10);
+    // Updating: the first pass makes ten places, the revisits update them; a revisited location
+    // is one place, but for frames 18 and 19, which ground truth also joins to each other (their
+    // locations hold places 8 and 9).
     if (mode == evaluation::PlacesMode::kUpdate) {
       EXPECT_EQ(summary.declared_new, 10);
       EXPECT_EQ(fabmap.places().size(), 10);
+      EXPECT_EQ(shape.places, 10);
+      EXPECT_DOUBLE_EQ(shape.largest_place_share, 2.0 / 20);
+      EXPECT_DOUBLE_EQ(shape.places_per_revisited_location, (8 * 1 + 2 * 2) / 10.0);
     } else {
       EXPECT_EQ(fabmap.places().size(), 20);
+      EXPECT_EQ(shape.places, 20);
+      EXPECT_DOUBLE_EQ(shape.largest_place_share, 1.0 / 20);
+      EXPECT_DOUBLE_EQ(shape.places_per_revisited_location, (8 * 2 + 2 * 3) / 10.0);
     }
   }
 
@@ -316,12 +342,61 @@ TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
   const std::vector<PlaceQueryResult> results =
       evaluation::RunTfIdfQueries(passes.frames, truth, &index);
   ASSERT_EQ(results.size(), 20u);
-  for (int j = 10; j < 20; ++j) EXPECT_EQ(results[static_cast<std::size_t>(j)].best_frame, j - 10);
+  for (int j = 10; j < 20; ++j) {
+    EXPECT_EQ(results[static_cast<std::size_t>(j)].best_frame, j - 10);
+    EXPECT_EQ(results[static_cast<std::size_t>(j)].true_candidate_rank, 0);
+  }
   const evaluation::PlaceRecognitionSummary summary =
       evaluation::SummarizePlaceRecognition(results);
   EXPECT_EQ(summary.queries_with_true_match, 10);
   EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 1.0);
   EXPECT_EQ(summary.declared_new, 0);  // tf-idf has no new-place decision
+}
+
+TEST(PlaceRecognitionQueries, CandidateRecallCountsTrueAnswersAmongTheBestK) {
+  // Six queries with a true match whose true answer ranks 0, 1, 2, 4, beyond the ranking, and
+  // 0; one without a true match (its rank does not count).
+  std::vector<PlaceQueryResult> results;
+  for (const int rank : {0, 1, 2, 4, -1, 0}) {
+    PlaceQueryResult result;
+    result.has_candidates = result.has_true_match = true;
+    result.true_candidate_rank = rank;
+    results.push_back(result);
+  }
+  PlaceQueryResult no_match;
+  no_match.has_candidates = true;
+  no_match.true_candidate_rank = 0;
+  results.push_back(no_match);
+  EXPECT_DOUBLE_EQ(evaluation::CandidateRecall(results, 1), 2.0 / 6);
+  EXPECT_DOUBLE_EQ(evaluation::CandidateRecall(results, 3), 4.0 / 6);
+  EXPECT_DOUBLE_EQ(evaluation::CandidateRecall(results, 5), 5.0 / 6);
+  EXPECT_THROW(evaluation::CandidateRecall(results, 0), std::invalid_argument);
+  EXPECT_THROW(evaluation::CandidateRecall(results, PlaceQueryResult::kRankedCandidates + 1),
+               std::invalid_argument);
+  EXPECT_DOUBLE_EQ(evaluation::CandidateRecall({no_match}, 1), 0.0);
+}
+
+// A place that swallows a corridor: frames 0, 3, 4 and 5 in one place. Frame 3 revisits frame 0
+// and frame 4 frame 1 (window: one frame).
+TEST(PlaceRecognitionQueries, DescribePlacesFindsAPlaceThatSwallowsACorridor) {
+  evaluation::PlaceRecognitionFrames frames;
+  frames.times = {0, 1, 2, 3, 4, 5};
+  frames.words = frames.word_sets = std::vector<std::vector<int>>(6, std::vector<int>{1});
+  frames.window = 1;
+  cv::Mat same = cv::Mat::eye(6, 6, CV_8U);
+  same.at<unsigned char>(0, 3) = same.at<unsigned char>(1, 4) = 1;
+  const PlaceGroundTruth truth(same);
+  const evaluation::PlaceMapShape shape =
+      evaluation::DescribePlaces(frames, truth, {0, 1, 2, 0, 0, 0});
+  EXPECT_EQ(shape.places, 3);
+  EXPECT_EQ(shape.largest_place_frames, 4);
+  EXPECT_DOUBLE_EQ(shape.largest_place_share, 4.0 / 6);
+  EXPECT_EQ(shape.revisited_locations, 2);
+  // Frame 3's location (frames 0 and 3) is one place; frame 4's (1 and 4) is two.
+  EXPECT_DOUBLE_EQ(shape.places_per_revisited_location, (1 + 2) / 2.0);
+  EXPECT_THROW(evaluation::DescribePlaces(frames, truth, {0, 1}), std::invalid_argument);
+  EXPECT_THROW(evaluation::DescribePlaces(frames, truth, {0, 1, 2, -1, 0, 0}),
+               std::invalid_argument);
 }
 
 TEST(PlaceRecognitionQueries, RefusesMismatchedInput) {

@@ -18,6 +18,12 @@ struct PlaceQueryResult {
   // so FabMap::Add would make the view a new place. False for methods without the notion.
   bool declared_new = false;
   bool is_true = false;  // ground truth: the query shows the same place as best_frame
+  // Where the first true answer stands in the method's ranking of the candidates (0 = best):
+  // FAB-MAP's places with a posterior at or above the loop detector's floor, tf-idf's images by
+  // cosine; -1 if none of the first kRankedCandidates is true. The loop detector verifies its
+  // best few geometrically, so a true place among them can still close the loop.
+  int true_candidate_rank = -1;
+  static constexpr int kRankedCandidates = 10;
 };
 
 // Declaring a match whenever the score reaches `threshold`.
@@ -47,12 +53,18 @@ PlacePrecisionRecallPoint PointAtThreshold(const std::vector<PlaceQueryResult>& 
 // credit a method with precision it never reaches at that recall).
 double AreaUnderCurve(const std::vector<PlacePrecisionRecallPoint>& curve);
 
+// Candidate recall @K: of the queries with a true match, the fraction whose true answer is among
+// the method's K best candidates (true_candidate_rank < K); 0 without such queries. K must lie
+// in [1, PlaceQueryResult::kRankedCandidates].
+double CandidateRecall(const std::vector<PlaceQueryResult>& results, int k);
+
 struct PlaceRecognitionSummary {
   int queries = 0;                  // frames with at least one loop candidate
   int queries_with_true_match = 0;  // of those, with a true earlier match outside the window
   int declared_new = 0;             // FAB-MAP: frames the whole map would call a new place
   double recall_at_full_precision = 0;
   double auc = 0;
+  double candidate_recall_at_1 = 0, candidate_recall_at_3 = 0, candidate_recall_at_5 = 0;
 };
 
 PlaceRecognitionSummary SummarizePlaceRecognition(const std::vector<PlaceQueryResult>& results);

@@ -40,20 +40,45 @@ ExcludedPairs CountExcludedPairs(const PlaceRecognitionFrames& frames,
 
 using QueryProgress = std::function<void(int done, int total)>;
 
+struct FabMapQueryOptions {
+  PlacesMode mode = PlacesMode::kPerImage;
+  double match_log_odds = 0;  // FabMap::Add's threshold (fabmap.match_log_odds)
+  // The loop detector's posterior floor (loop_detection.min_probability): candidate ranks count
+  // only places at or above it, as the detector hands only those to geometric verification.
+  double candidate_floor = 0;
+};
+
+struct FabMapQueries {
+  std::vector<PlaceQueryResult> results;  // per frame
+  std::vector<int> place_of_frame;        // the place each frame became or joined
+};
+
+// How the frames fell into places. A location is revisited when a frame has a true match
+// outside the window; the frames showing it are that frame and every frame ground truth calls
+// the same place. One place per location is the ideal; one place for many locations (a corridor
+// swallowed whole) is what the largest place's share reveals.
+struct PlaceMapShape {
+  int places = 0;
+  int largest_place_frames = 0;
+  double largest_place_share = 0;            // of all frames
+  int revisited_locations = 0;               // frames with a true match outside the window
+  double places_per_revisited_location = 0;  // mean distinct places among a location's frames
+};
+PlaceMapShape DescribePlaces(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& truth,
+                             const std::vector<int>& place_of_frame);
+
 // Each frame in turn is a query against the places built from the frames before it; then it
-// joins the map as `mode` says. The query is compared with the places that hold a frame outside
-// the window (FabMap::Compare over candidates, as loop detection leaves out the recent past):
-// the best of them, its posterior and the new-place probability. A place is the query's true
+// joins the map as `options.mode` says. The query is compared with the places that hold a frame
+// outside the window (FabMap::Compare over candidates, as loop detection leaves out the recent
+// past): the best of them, its posterior and the new-place probability. A place is the query's true
 // match when ground truth links the query to one of the place's frames outside the window;
 // best_frame is that frame, or the place's latest frame outside the window if none is.
 // declared_new comes from the comparison with the whole map, recent frames included, as Add
 // decides. `fabmap` must be empty; it holds the places afterwards. Throws std::invalid_argument
 // if the frames and the ground truth differ in size.
-std::vector<PlaceQueryResult> RunFabMapQueries(const PlaceRecognitionFrames& frames,
-                                               const PlaceGroundTruth& truth, PlacesMode mode,
-                                               double match_log_odds,
-                                               place_recognition::FabMap* fabmap,
-                                               const QueryProgress& progress = nullptr);
+FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& truth,
+                               const FabMapQueryOptions& options, place_recognition::FabMap* fabmap,
+                               const QueryProgress& progress = nullptr);
 
 // The same queries with the tf-idf cosine, one place per image: the best-scoring earlier image
 // outside the window. `index` must be empty; it holds every frame afterwards.
