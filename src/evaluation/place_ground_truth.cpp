@@ -79,9 +79,21 @@ PlaceGroundTruth PlaceGroundTruth::FromPoses(
     const std::vector<std::vector<Eigen::Vector3d>>& points,
     const std::vector<std::optional<Eigen::Isometry3d>>& T_world_camera,
     const geometry::StereoCamera& camera, double tau) {
+  PlaceRelevance relevance;
+  relevance.tau = tau;
+  return FromPoses(points, T_world_camera, camera, relevance);
+}
+
+PlaceGroundTruth PlaceGroundTruth::FromPoses(
+    const std::vector<std::vector<Eigen::Vector3d>>& points,
+    const std::vector<std::optional<Eigen::Isometry3d>>& T_world_camera,
+    const geometry::StereoCamera& camera, const PlaceRelevance& relevance) {
   if (points.size() != T_world_camera.size())
     throw std::invalid_argument("PlaceGroundTruth: one point list per pose is needed");
+  const double tau = relevance.tau;
   if (!(tau > 0.0 && tau <= 1.0)) throw std::invalid_argument("PlaceGroundTruth: tau in (0, 1]");
+  if (!(relevance.max_distance > 0.0))
+    throw std::invalid_argument("PlaceGroundTruth: the largest distance must be > 0");
   const int n = static_cast<int>(points.size());
   cv::Mat same = cv::Mat::eye(n, n, CV_8U);
   for (int i = 0; i < n; ++i) {
@@ -89,8 +101,10 @@ PlaceGroundTruth PlaceGroundTruth::FromPoses(
     for (int j = i + 1; j < n; ++j) {
       if (!T_world_camera[j]) continue;
       const Eigen::Isometry3d T_j_i = T_world_camera[j]->inverse() * *T_world_camera[i];
-      same.at<unsigned char>(i, j) = VisibleFraction(points[i], T_j_i, camera) >= tau ||
-                                     VisibleFraction(points[j], T_j_i.inverse(), camera) >= tau;
+      if (T_j_i.translation().norm() > relevance.max_distance) continue;
+      const bool i_in_j = VisibleFraction(points[i], T_j_i, camera) >= tau;
+      const bool j_in_i = VisibleFraction(points[j], T_j_i.inverse(), camera) >= tau;
+      same.at<unsigned char>(i, j) = relevance.mutual ? i_in_j && j_in_i : i_in_j || j_in_i;
     }
   }
   return PlaceGroundTruth(same);

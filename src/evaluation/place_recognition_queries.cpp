@@ -110,7 +110,8 @@ FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const Place
             [&](int p) { return restricted.posterior[static_cast<std::size_t>(p)]; },
             [&](int p) {
               return candidates[static_cast<std::size_t>(p)] &&
-                     restricted.posterior[static_cast<std::size_t>(p)] >= options.candidate_floor;
+                     restricted.posterior[static_cast<std::size_t>(p)] >= options.candidate_floor &&
+                     restricted.CandidateLogOdds(p) >= options.candidate_min_log_odds;
             },
             place_is_true);
       }

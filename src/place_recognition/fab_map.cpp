@@ -332,6 +332,7 @@ FabMapResult FabMap::Compare(const std::vector<int>& words,
   // As Compare with a uniform prior, over the candidates only.
   const double log_uniform = std::log((1 - options_.new_place_prior) / n);
   const double log_new = result.new_place_log_likelihood + std::log(options_.new_place_prior);
+  result.candidate_log_prior_odds = log_uniform - std::log(options_.new_place_prior);
   // The candidates' log joints go into `posterior` first and are exponentiated in place: no
   // second array of the map's size on the query path.
   double top = log_new;

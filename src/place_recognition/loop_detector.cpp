@@ -105,7 +105,8 @@ void LoopDetector::AddPlace(const map::StoredKeyframe& stored) {
 
 PlaceQuery LoopDetector::Candidates(const std::vector<int>& words,
                                     const std::function<bool(const map::StoredKeyframe&)>& allowed,
-                                    int max_candidates, double min_probability) const {
+                                    int max_candidates, double min_probability,
+                                    double min_log_odds) const {
   PlaceQuery query;
   std::vector<char> mask(place_keyframes_.size(), 0);
   for (std::size_t i = 0; i < place_keyframes_.size(); ++i) {
@@ -117,7 +118,10 @@ PlaceQuery LoopDetector::Candidates(const std::vector<int>& words,
   query.new_place_probability = result.new_place;
   std::vector<int> order;
   for (std::size_t i = 0; i < mask.size(); ++i) {
-    if (mask[i] && result.posterior[i] >= min_probability) order.push_back(static_cast<int>(i));
+    if (mask[i] && result.posterior[i] >= min_probability &&
+        result.CandidateLogOdds(static_cast<int>(i)) >= min_log_odds) {
+      order.push_back(static_cast<int>(i));
+    }
   }
   // Best first; equal posteriors in map order, so that the result is deterministic.
   std::sort(order.begin(), order.end(), [&](int a, int b) {
@@ -142,7 +146,8 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
            std::abs(place.keyframe.timestamp - query_time) >= options_.min_age;
   };
   const PlaceQuery places =
-      Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability);
+      Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability,
+                 options_.min_log_odds);
   detection.new_place_probability = places.new_place_probability;
   detection.places_compared = places.places_compared;
   // Verified best posterior first, until one is accepted (as ORB-SLAM verifies its candidates):

@@ -1,6 +1,7 @@
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "stereo_fabmap_slam/io/input_error.h"
@@ -67,6 +68,7 @@ void FabMapOptions::Validate() const {
 void LoopDetectorOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_age", &min_age);
   visitor.Visit("min_probability", &min_probability);
+  visitor.Visit("min_log_odds", &min_log_odds);
   visitor.Visit("max_candidates", &max_candidates);
   visitor.Visit("match_ratio", &match_ratio);
   io::VisitEnum(visitor, "pnp_kernel", &pnp_kernel, geometry::kPnpKernelNames);
@@ -87,6 +89,8 @@ void LoopDetectorOptions::Validate() const {
   if (!(min_probability >= 0 && min_probability <= 1)) {
     throw std::invalid_argument("loop_detection.min_probability must lie in [0, 1]");
   }
+  if (std::isnan(min_log_odds) || min_log_odds == std::numeric_limits<double>::infinity())
+    throw std::invalid_argument("loop_detection.min_log_odds must be a number (or -inf)");
   if (max_candidates < 1) throw std::invalid_argument("loop_detection.max_candidates must be >= 1");
   if (!(match_ratio > 0 && match_ratio <= 1)) {
     throw std::invalid_argument("loop_detection.match_ratio must lie in (0, 1]");

@@ -42,7 +42,8 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 namespace fs = std::filesystem;
 
 constexpr char kUsage[] =
-    "usage: evaluate_place_recognition ASL_DIR [--tau T] [--exclude-seconds S]\n"
+    "usage: evaluate_place_recognition ASL_DIR [--tau T] [--mutual] [--max-distance D]\n"
+    "                                  [--exclude-seconds S]\n"
     "       evaluate_place_recognition IMAGE_DIR --gt FILE [--exclude-frames K]\n"
     "           [--places per-image|update|both] [--every N] [--vocabulary FILE]\n"
     "           [--config FILE] [--fabmap-config FILE] [--output DIR] [--json]\n"
@@ -52,7 +53,11 @@ constexpr char kUsage[] =
     "precision-recall against ground truth; the headline is the recall at 100 % precision.\n"
     "  ASL_DIR            EuRoC layout with ground truth: two frames show the same place when\n"
     "                     at least T (--tau, default 0.5) of one frame's stereo points land in\n"
-    "                     the other's image, carried there by the ground-truth poses\n"
+    "                     the other's image, carried there by the ground-truth poses;\n"
+    "                     --mutual: each frame must see T of the other's points (looking\n"
+    "                     down a corridor, the view from far back sees the doors ahead, not\n"
+    "                     the other way round); --max-distance D: cameras at most D m apart\n"
+    "                     (default 3; inf for none)\n"
     "  --gt F             for an image folder (*.png, *.jpg in name order): an N x N matrix,\n"
     "                     CSV/text of N rows of N numbers or a grey N x N image, non-zero =\n"
     "                     same place\n"
@@ -108,7 +113,8 @@ void AddWords(const place_recognition::Vocabulary& vocabulary, const cv::Mat& de
 
 // A EuRoC-layout sequence: words of the rectified left image (what a keyframe carries), and
 // stereo points with the rectified left camera's ground-truth pose for the relevance test.
-Input ReadSequence(const std::string& directory, int every, double tau, double window,
+Input ReadSequence(const std::string& directory, int every,
+                   const evaluation::PlaceRelevance& relevance, double window,
                    const tools::SlamConfiguration& options,
                    const place_recognition::PlaceRecognitionOptions& place_options,
                    const place_recognition::Vocabulary& vocabulary) {
@@ -167,8 +173,10 @@ Input ReadSequence(const std::string& directory, int every, double tau, double w
     std::fprintf(stderr, "%zu of %zu frames without ground truth left out\n", without_truth, total);
   }
   if (points.empty()) throw std::invalid_argument(directory + ": no frame has ground truth");
-  std::fprintf(stderr, "ground truth of %zu frames (tau %.2f)\n", points.size(), tau);
-  input.truth = evaluation::PlaceGroundTruth::FromPoses(points, poses, rectifier.camera(), tau);
+  std::fprintf(stderr, "ground truth of %zu frames (tau %.2f%s, within %g m)\n", points.size(),
+               relevance.tau, relevance.mutual ? ", mutual" : "", relevance.max_distance);
+  input.truth =
+      evaluation::PlaceGroundTruth::FromPoses(points, poses, rectifier.camera(), relevance);
   return input;
 }
 
@@ -216,6 +224,7 @@ struct Run {
   // FAB-MAP: matches declared at the configured fabmap.match_log_odds; tf-idf has no default.
   std::optional<evaluation::PlacePrecisionRecallPoint> at_default;
   std::optional<evaluation::PlaceMapShape> shape;  // FAB-MAP: how the frames fell into places
+  std::vector<int> place_of_frame;                 // FAB-MAP: the place each frame joined
   double seconds = 0;
 };
 
@@ -240,7 +249,7 @@ void WriteOutputs(const std::string& directory, const Input& input,
       "candidate_recall_at_5,places,largest_place_share,places_per_revisited_location\n";
   std::string queries =
       "method,mode,query,image,time,best_place,best_frame,best_image,score,"
-      "new_place_probability,declared_new,has_true_match,is_true,true_candidate_rank\n";
+      "new_place_probability,declared_new,has_true_match,is_true,true_candidate_rank,place\n";
   for (const Run& run : runs) {
     const std::string prefix = run.method + "," + run.mode + ",";
     for (const evaluation::PlacePrecisionRecallPoint& point : run.curve) {
@@ -276,7 +285,8 @@ void WriteOutputs(const std::string& directory, const Input& input,
           Number(result.new_place_probability) + "," +
           (run.method == "fabmap" ? (result.declared_new ? "1" : "0") : "") + "," +
           (result.has_true_match ? "1" : "0") + "," + (result.is_true ? "1" : "0") + "," +
-          (result.has_true_match ? std::to_string(result.true_candidate_rank) : "") + "\n";
+          (result.has_true_match ? std::to_string(result.true_candidate_rank) : "") + "," +
+          (run.place_of_frame.empty() ? "" : std::to_string(run.place_of_frame[q])) + "\n";
     }
   }
   WriteText(directory + "/place_recognition_pr.csv", pr);
@@ -362,12 +372,19 @@ int main(int argc, char** argv) {
   std::optional<tools::CommandLine> args;
   std::vector<evaluation::PlacesMode> modes;
   int every = 1;
-  double tau = 0.5, exclude_seconds = 5, exclude_frames = 5;
+  evaluation::PlaceRelevance relevance;
+  // Two views are one place only with the cameras within 3 m: three times the revisit radius of
+  // the rendered routes (1 m), near enough for the two views' stereo points to verify a loop,
+  // and short of the far side of a hall or a room. Without it, looking down a corridor, the view
+  // from 20 m back "sees" the doors ahead and every frame of a long corridor is a revisit.
+  relevance.max_distance = 3.0;
+  double exclude_seconds = 5, exclude_frames = 5;
   try {
     args.emplace(argc, argv,
-                 std::set<std::string>{"tau", "exclude-seconds", "exclude-frames", "gt", "places",
-                                       "every", "vocabulary", "config", "fabmap-config", "output"},
-                 std::set<std::string>{"json", "help"});
+                 std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames",
+                                       "gt", "places", "every", "vocabulary", "config",
+                                       "fabmap-config", "output"},
+                 std::set<std::string>{"mutual", "json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -378,8 +395,12 @@ int main(int argc, char** argv) {
     if (every_number < 1 || every_number != std::floor(every_number))
       throw std::invalid_argument("--every must be a whole number >= 1");
     every = static_cast<int>(every_number);
-    tau = args->NumberOr("tau", tau);
-    if (!(tau > 0 && tau <= 1)) throw std::invalid_argument("--tau must lie in (0, 1]");
+    relevance.tau = args->NumberOr("tau", relevance.tau);
+    if (!(relevance.tau > 0 && relevance.tau <= 1))
+      throw std::invalid_argument("--tau must lie in (0, 1]");
+    relevance.max_distance = args->NumberOr("max-distance", relevance.max_distance);
+    if (!(relevance.max_distance > 0)) throw std::invalid_argument("--max-distance must be > 0");
+    relevance.mutual = args->Flag("mutual");
     exclude_seconds = args->NumberOr("exclude-seconds", exclude_seconds);
     exclude_frames = args->NumberOr("exclude-frames", exclude_frames);
     if (!(exclude_seconds >= 0) || !(exclude_frames >= 0))
@@ -389,8 +410,10 @@ int main(int argc, char** argv) {
       throw std::invalid_argument(
           "--exclude-seconds is for sequences, --exclude-frames for folders with --gt");
     }
-    if (args->Value("gt") && args->Value("tau"))
-      throw std::invalid_argument("--tau is for sequences (ground truth from poses)");
+    if (args->Value("gt") &&
+        (args->Value("tau") || args->Value("max-distance") || args->Flag("mutual")))
+      throw std::invalid_argument(
+          "--tau, --max-distance and --mutual are for sequences (ground truth from poses)");
     const std::string places = args->ValueOr("places", "both");
     if (places == "per-image" || places == "both")
       modes.push_back(evaluation::PlacesMode::kPerImage);
@@ -421,7 +444,7 @@ int main(int argc, char** argv) {
     const double start = NowSeconds();
     const Input input = args->Value("gt") ? ReadFolder(source, *args->Value("gt"), every,
                                                        exclude_frames, place_options, vocabulary)
-                                          : ReadSequence(source, every, tau, exclude_seconds,
+                                          : ReadSequence(source, every, relevance, exclude_seconds,
                                                          options, place_options, vocabulary);
     std::fprintf(stderr, "features, words and ground truth: %.1f s\n", NowSeconds() - start);
     const evaluation::ExcludedPairs excluded =
@@ -429,13 +452,14 @@ int main(int argc, char** argv) {
 
     std::vector<Run> runs;
     for (const evaluation::PlacesMode mode : modes) {
-      Run run{"fabmap", evaluation::PlacesModeName(mode), {}, {}, {}, {}, {}, 0};
+      Run run{"fabmap", evaluation::PlacesModeName(mode), {}, {}, {}, {}, {}, {}, 0};
       const double run_start = NowSeconds();
       place_recognition::FabMap fabmap(tree, place_options.fabmap, training);
       evaluation::FabMapQueryOptions query_options;
       query_options.mode = mode;
       query_options.match_log_odds = place_options.fabmap.match_log_odds;
       query_options.candidate_floor = options.loop_detection.min_probability;
+      query_options.candidate_min_log_odds = options.loop_detection.min_log_odds;
       evaluation::FabMapQueries queries = evaluation::RunFabMapQueries(
           input.frames, *input.truth, query_options, &fabmap, [&](int done, int total) {
             if (done % 500 == 0 || done == total)
@@ -445,11 +469,12 @@ int main(int argc, char** argv) {
       run.seconds = NowSeconds() - run_start;
       run.results = std::move(queries.results);
       run.shape = evaluation::DescribePlaces(input.frames, *input.truth, queries.place_of_frame);
+      run.place_of_frame = std::move(queries.place_of_frame);
       runs.push_back(std::move(run));
     }
     {
       // tf-idf has no places to update: one image each, under both modes' queries.
-      Run run{"tfidf", "per-image", {}, {}, {}, {}, {}, 0};
+      Run run{"tfidf", "per-image", {}, {}, {}, {}, {}, {}, 0};
       const double run_start = NowSeconds();
       std::vector<std::vector<int>> training_words;
       for (int i = 0; i < training.size(); ++i) {

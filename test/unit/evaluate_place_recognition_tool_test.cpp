@@ -253,7 +253,10 @@ TEST(EvaluatePlaceRecognitionTool, Mh01RecallAtFullPrecision) {
 // apart. With places updated on revisits, no match FAB-MAP declares at the default threshold
 // (fabmap.match_log_odds) may be false. With the four vocabularies above: precision 1 with each,
 // recall at the default 21.3-27.0 % (25.3 % shipped), at 100 % precision 28.6-29.5 % against
-// tf-idf's 0.7-4.0 %. At least 15 % at the default: 27 queries below the lowest.
+// tf-idf's 0.7-4.0 %. At least 15 % at the default: 27 queries below the lowest. Those figures
+// were measured with the visibility test alone (--max-distance inf), which counts the views
+// across the hall as revisits: the bounds hold for that relation, so the test keeps it. (With the
+// default 3 m, 174 queries have a true match; shipped vocabulary: precision 1, recall 66 %.)
 TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefaultThreshold) {
   TemporaryDirectory temp;
   std::string output;
@@ -263,7 +266,8 @@ TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefau
             0)
       << output;
   ASSERT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() +
-                           "/figure8 --places update --output " + temp.path() + " 2>/dev/null",
+                           "/figure8 --places update --max-distance inf --output " +
+                           temp.path() + " 2>/dev/null",
                        &output),
             0)
       << output;

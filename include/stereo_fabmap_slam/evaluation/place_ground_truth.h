@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,6 +11,16 @@
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 
 namespace stereo_fabmap_slam::evaluation {
+
+// When two posed frames show the same place (FromPoses).
+struct PlaceRelevance {
+  double tau = 0.5;  // the fraction of a frame's points the other camera must see
+  // Both frames must see tau of each other's points, not one of the other's. Looking down a
+  // corridor, the view from 20 m back sees the doors ahead (far and small) but not the other
+  // way round: with `mutual` it is another place, as it is for the loop detector.
+  bool mutual = false;
+  double max_distance = std::numeric_limits<double>::infinity();  // [m] between the cameras
+};
 
 // Which frames of a sequence show the same place: a symmetric N x N relation, from the
 // ground-truth poses or from a matrix shipped with an image folder.
@@ -35,6 +46,11 @@ class PlaceGroundTruth {
       const std::vector<std::vector<Eigen::Vector3d>>& points,
       const std::vector<std::optional<Eigen::Isometry3d>>& T_world_camera,
       const geometry::StereoCamera& camera, double tau);
+  // The same with the relevance test's other conditions (mutual visibility, distance).
+  static PlaceGroundTruth FromPoses(
+      const std::vector<std::vector<Eigen::Vector3d>>& points,
+      const std::vector<std::optional<Eigen::Isometry3d>>& T_world_camera,
+      const geometry::StereoCamera& camera, const PlaceRelevance& relevance);
 
   // The relation among the frames `indices` (e.g. every n-th image of the folder), in that order.
   // Throws std::out_of_range for an index outside the matrix.

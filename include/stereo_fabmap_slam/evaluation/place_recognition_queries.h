@@ -1,6 +1,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "stereo_fabmap_slam/evaluation/place_ground_truth.h"
@@ -46,6 +47,8 @@ struct FabMapQueryOptions {
   // The loop detector's posterior floor (loop_detection.min_probability): candidate ranks count
   // only places at or above it, as the detector hands only those to geometric verification.
   double candidate_floor = 0;
+  // ...and its floor on a candidate's log odds against a new place (loop_detection.min_log_odds).
+  double candidate_min_log_odds = -std::numeric_limits<double>::infinity();
 };
 
 struct FabMapQueries {

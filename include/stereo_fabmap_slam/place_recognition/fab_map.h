@@ -56,6 +56,17 @@ struct FabMapResult {
   double best_log_odds = -std::numeric_limits<double>::infinity();
   std::vector<double> log_likelihoods;  // log p(Z | place)
   double new_place_log_likelihood = 0;  // log p(Z | new place)
+  // Compare over candidates: log(p(candidate) / p(new place)) under its uniform prior, the same
+  // for every candidate.
+  double candidate_log_prior_odds = 0;
+
+  // Compare over candidates: how much likelier the view shows candidate `place` than a new
+  // place (best_log_odds for the best). Each candidate on its own evidence, unlike the
+  // posterior, which saturates at the best one.
+  double CandidateLogOdds(int place) const {
+    return log_likelihoods[static_cast<std::size_t>(place)] - new_place_log_likelihood +
+           candidate_log_prior_odds;
+  }
 };
 
 // FAB-MAP: the posterior over the places in the map and a new place, given the words of a view.

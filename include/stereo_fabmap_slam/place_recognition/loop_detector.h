@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -83,10 +84,11 @@ class LoopDetector {
 
   // FAB-MAP's best places for a view's words among the keyframes `allowed` accepts (the
   // posterior is taken over those alone): at most max_candidates with a posterior of at least
-  // min_probability, best first.
+  // min_probability and log odds against a new place of at least min_log_odds, best first.
   PlaceQuery Candidates(const std::vector<int>& words,
                         const std::function<bool(const map::StoredKeyframe&)>& allowed,
-                        int max_candidates, double min_probability) const;
+                        int max_candidates, double min_probability,
+                        double min_log_odds = -std::numeric_limits<double>::infinity()) const;
 
   // The bundle adjustment moved a keyframe (odom frame).
   void UpdatePose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {

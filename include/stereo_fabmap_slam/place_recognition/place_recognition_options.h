@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <string>
 
 #include "stereo_fabmap_slam/features/features_options.h"
@@ -89,6 +90,8 @@ struct LoopDetectorOptions {
   // keyframes of one old place share the posterior mass, so a true revisit often shows as
   // several candidates of 0.1 - 0.5 each; verification, not this threshold, gives precision.
   double min_probability = 0.05;
+  // ...and whose log odds against a new place (FabMapResult::CandidateLogOdds) reach this.
+  double min_log_odds = -std::numeric_limits<double>::infinity();
   int max_candidates = 3;
   // Geometric verification: query key points matched by descriptor to the candidate's stereo
   // points (nearest / second nearest < match_ratio), PnP RANSAC, motion-only refinement.
