@@ -145,9 +145,8 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
     return place.keyframe.id != query.keyframe.id &&
            std::abs(place.keyframe.timestamp - query_time) >= options_.min_age;
   };
-  const PlaceQuery places =
-      Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability,
-                 options_.min_log_odds);
+  const PlaceQuery places = Candidates(query.words, old_enough, options_.max_candidates,
+                                       options_.min_probability, options_.min_log_odds);
   detection.new_place_probability = places.new_place_probability;
   detection.places_compared = places.places_compared;
   // Verified best posterior first, until one is accepted (as ORB-SLAM verifies its candidates):

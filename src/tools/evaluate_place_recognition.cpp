@@ -380,11 +380,11 @@ int main(int argc, char** argv) {
   relevance.max_distance = 3.0;
   double exclude_seconds = 5, exclude_frames = 5;
   try {
-    args.emplace(argc, argv,
-                 std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames",
-                                       "gt", "places", "every", "vocabulary", "config",
-                                       "fabmap-config", "output"},
-                 std::set<std::string>{"mutual", "json", "help"});
+    args.emplace(
+        argc, argv,
+        std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames", "gt",
+                              "places", "every", "vocabulary", "config", "fabmap-config", "output"},
+        std::set<std::string>{"mutual", "json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;

@@ -266,8 +266,8 @@ TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefau
             0)
       << output;
   ASSERT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + temp.path() +
-                           "/figure8 --places update --max-distance inf --output " +
-                           temp.path() + " 2>/dev/null",
+                           "/figure8 --places update --max-distance inf --output " + temp.path() +
+                           " 2>/dev/null",
                        &output),
             0)
       << output;

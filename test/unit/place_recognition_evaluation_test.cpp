@@ -266,6 +266,43 @@ TwoPasses MakeTwoPasses() {
   return passes;
 }
 
+// Looking down a corridor: camera B stands 4 m behind camera A, both looking along +z. A's
+// points (a wall 5 m ahead of it) lie inside B's image, 9 m ahead; B's points (a frame around
+// the corridor 1 m ahead of B) lie behind A. One sees the other's points, not the other way
+// round; and the cameras are 4 m apart.
+TEST(PlaceGroundTruth, MutualVisibilityAndDistanceNarrowTheRelation) {
+  geometry::StereoCamera camera;
+  camera.size = cv::Size(640, 480);
+  camera.fx = camera.fy = 500;
+  camera.cx = 320;
+  camera.cy = 240;
+  camera.baseline = 0.1;
+  std::vector<Eigen::Vector3d> wall, frame;
+  for (int x = -5; x <= 5; ++x) {
+    for (int y = -3; y <= 3; ++y) {
+      wall.emplace_back(0.2 * x, 0.2 * y, 5.0);
+      frame.emplace_back(0.2 * x, 0.2 * y, 1.0);
+    }
+  }
+  Eigen::Isometry3d behind = Eigen::Isometry3d::Identity();
+  behind.translation().z() = -4.0;
+  const std::vector<std::optional<Eigen::Isometry3d>> poses = {Eigen::Isometry3d::Identity(),
+                                                               behind};
+  const std::vector<std::vector<Eigen::Vector3d>> points = {wall, frame};
+  evaluation::PlaceRelevance relevance;
+  EXPECT_TRUE(PlaceGroundTruth::FromPoses(points, poses, camera, relevance).Same(0, 1));
+  relevance.mutual = true;
+  EXPECT_FALSE(PlaceGroundTruth::FromPoses(points, poses, camera, relevance).Same(0, 1));
+  relevance.mutual = false;
+  relevance.max_distance = 3.9;
+  EXPECT_FALSE(PlaceGroundTruth::FromPoses(points, poses, camera, relevance).Same(0, 1));
+  relevance.max_distance = 4.1;
+  EXPECT_TRUE(PlaceGroundTruth::FromPoses(points, poses, camera, relevance).Same(0, 1));
+  relevance.max_distance = 0.0;
+  EXPECT_THROW(PlaceGroundTruth::FromPoses(points, poses, camera, relevance),
+               std::invalid_argument);
+}
+
 TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
   const TwoPasses passes = MakeTwoPasses();
   const PlaceGroundTruth truth(passes.same);
