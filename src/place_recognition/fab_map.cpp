@@ -93,6 +93,12 @@ void FabMap::SetPlaces(PlaceDatabase places) {
   }
   places_.database = std::move(places);
   Reindex(&places_);
+  // A loaded place's first view is not stored: the place as a whole stands for it.
+  first_views_.clear();
+  for (int i = 0; i < places_.database.size(); ++i) {
+    const std::vector<std::int32_t>& words = places_.database.place(i).words;
+    first_views_.emplace_back(words.begin(), words.end());
+  }
   last_match_ = -1;
 }
 
@@ -363,13 +369,30 @@ FabMapResult FabMap::Compare(const std::vector<int>& words,
 int FabMap::AddPlace(const std::vector<int>& words) {
   const int index = places_.database.AddPlace(words);
   places_.hit_sums.push_back(HitSum(places_.database.place(index)));
+  first_views_.push_back(words);
   return index;
+}
+
+double FabMap::FirstViewLogLikelihood(int place, const Query& query) const {
+  IndexedPlaces first;
+  first.database = PlaceDatabase(model_.size());
+  first.database.AddPlace(first_views_[static_cast<std::size_t>(place)]);
+  first.hit_sums.push_back(HitSum(first.database.place(0)));
+  return LogLikelihoods(first, query).front();
 }
 
 FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
   FabMapResult result = Compare(words);
+  bool update = result.best >= 0 && result.best_log_odds >= options_.match_log_odds;
+  if (update && options_.update_near_first_view) {
+    // The same log odds with the place's first view in place of the place.
+    const double first = FirstViewLogLikelihood(result.best, Prepare(words));
+    update = result.best_log_odds + first -
+                 result.log_likelihoods[static_cast<std::size_t>(result.best)] >=
+             options_.match_log_odds;
+  }
   int index;
-  if (result.best >= 0 && result.best_log_odds >= options_.match_log_odds) {
+  if (update) {
     index = result.best;
     places_.database.UpdatePlace(index, words);
     places_.hit_sums[static_cast<std::size_t>(index)] = HitSum(places_.database.place(index));

@@ -44,6 +44,7 @@ void FabMapOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("inverted_index", &inverted_index);
   visitor.Visit("exact_tree_corrections", &exact_tree_corrections);
   visitor.Visit("match_log_odds", &match_log_odds);
+  visitor.Visit("update_near_first_view", &update_near_first_view);
 }
 
 void ValidateDetectorRates(double p_z_given_e, double p_z_given_not_e, const std::string& what) {

@@ -451,6 +451,42 @@ TEST(FabMap, AddUpdatesAMatchedPlaceAndAddsANewOne) {
   EXPECT_EQ(fabmap.places().size(), 2);
 }
 
+// A chain of views down a corridor: B shows half of A's words and 20 others, C those 20 and 20
+// more, none of A's. Updating by appearance alone makes one place of all three; with
+// update_near_first_view, C does not match the place's first view (A) and founds its own.
+TEST(FabMap, UpdateNearFirstViewStopsAChainOfViews) {
+  RandomWordSets random_sets(300, 4);
+  std::vector<std::vector<int>> training;
+  for (int i = 0; i < 200; ++i) training.push_back(random_sets.Next(40));
+  const auto words = [](std::initializer_list<std::pair<int, int>> ranges) {
+    std::vector<int> set;
+    for (const auto& [first, last] : ranges) {
+      for (int w = first; w < last; ++w) set.push_back(w);
+    }
+    return set;
+  };
+  const std::vector<int> a = words({{0, 40}}), b = words({{0, 20}, {100, 120}}),
+                         c = words({{100, 120}, {200, 220}});
+  for (const bool near_first_view : {false, true}) {
+    SCOPED_TRACE(near_first_view);
+    FabMapOptions options;
+    options.update_near_first_view = near_first_view;
+    FabMap fabmap(ChowLiuTree::Train(training, 300), options);
+    int place_a = -1, place_b = -1, place_c = -1;
+    fabmap.Add(a, &place_a);
+    fabmap.Add(b, &place_b);
+    EXPECT_EQ(place_b, place_a);  // half of A's words: A's place either way
+    fabmap.Add(c, &place_c);
+    if (near_first_view) {
+      EXPECT_NE(place_c, place_a);
+      EXPECT_EQ(fabmap.places().size(), 2);
+    } else {
+      EXPECT_EQ(place_c, place_a);  // through B's words: the chain
+      EXPECT_EQ(fabmap.places().size(), 1);
+    }
+  }
+}
+
 TEST(PostingList, KeepsPlacesInOrderAndAddsScoresOneOrTwoListsAtATime) {
   // Every encoded length; out-of-order inserts, merged once they are 1/64 of the list.
   // Gaps 0, 1, 127, 1, 2^14 - 1, 2^14, 2^21, 2^28, 1: 1, 1, 1, 1, 2, 3, 4, 5 and 1 bytes.

@@ -120,10 +120,12 @@ class FabMap {
   std::vector<double> LogLikelihoodsFull(const IndexedPlaces& places, const Query& query) const;
   std::vector<double> LogLikelihoodsIndexed(const IndexedPlaces& places, const Query& query) const;
   double NewPlaceLogLikelihood(const Query& query) const;
+  double FirstViewLogLikelihood(int place, const Query& query) const;
 
   FabMapOptions options_;
   FabMapModel model_;
   IndexedPlaces places_, samples_;
+  std::vector<std::vector<int>> first_views_;  // per place: the words it was founded with
   int last_match_ = -1;
 };
 

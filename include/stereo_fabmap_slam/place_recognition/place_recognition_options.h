@@ -62,6 +62,10 @@ struct FabMapOptions {
   // 0, "the likelier of the two", is the decision FAB-MAP's model itself makes, with no margin
   // tuned to a sequence. (A threshold on the smoothed posterior cannot serve: it saturates.)
   double match_log_odds = 0;
+  // Add(): a view updates its best place only if it would also match the place's first view
+  // alone. A place then stays around where it was first seen, instead of growing along a chain
+  // of similar views down a corridor into one place for the whole corridor.
+  bool update_near_first_view = false;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
