@@ -183,18 +183,30 @@ TEST(PlaceGroundTruth, RefusesMatricesThatAreNotSquare) {
   EXPECT_THROW(PlaceGroundTruth::Load(temp.path() + "/missing.png"), io::InputError);
 }
 
-TEST(PlaceGroundTruth, FromPosesUsesTheVisibleFraction) {
+// 640 x 480, focal 500 px, 10 cm baseline.
+geometry::StereoCamera TestCamera() {
   geometry::StereoCamera camera;
   camera.size = cv::Size(640, 480);
   camera.fx = camera.fy = 500;
   camera.cx = 320;
   camera.cy = 240;
   camera.baseline = 0.1;
-  // A wall of points 5 m ahead, filling the middle of the image.
-  std::vector<Eigen::Vector3d> wall;
+  return camera;
+}
+
+// 11 x 7 points 0.2 m apart, `depth` ahead of the camera, around its axis.
+std::vector<Eigen::Vector3d> PointGrid(double depth) {
+  std::vector<Eigen::Vector3d> points;
   for (int x = -5; x <= 5; ++x) {
-    for (int y = -3; y <= 3; ++y) wall.emplace_back(0.2 * x, 0.2 * y, 5.0);
+    for (int y = -3; y <= 3; ++y) points.emplace_back(0.2 * x, 0.2 * y, depth);
   }
+  return points;
+}
+
+TEST(PlaceGroundTruth, FromPosesUsesTheVisibleFraction) {
+  const geometry::StereoCamera camera = TestCamera();
+  // A wall of points 5 m ahead, filling the middle of the image.
+  const std::vector<Eigen::Vector3d> wall = PointGrid(5.0);
   const auto pose = [](double x, double yaw_deg) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation().x() = x;
@@ -271,19 +283,8 @@ TwoPasses MakeTwoPasses() {
 // the corridor 1 m ahead of B) lie behind A. One sees the other's points, not the other way
 // round; and the cameras are 4 m apart.
 TEST(PlaceGroundTruth, MutualVisibilityAndDistanceNarrowTheRelation) {
-  geometry::StereoCamera camera;
-  camera.size = cv::Size(640, 480);
-  camera.fx = camera.fy = 500;
-  camera.cx = 320;
-  camera.cy = 240;
-  camera.baseline = 0.1;
-  std::vector<Eigen::Vector3d> wall, frame;
-  for (int x = -5; x <= 5; ++x) {
-    for (int y = -3; y <= 3; ++y) {
-      wall.emplace_back(0.2 * x, 0.2 * y, 5.0);
-      frame.emplace_back(0.2 * x, 0.2 * y, 1.0);
-    }
-  }
+  const geometry::StereoCamera camera = TestCamera();
+  const std::vector<Eigen::Vector3d> wall = PointGrid(5.0), frame = PointGrid(1.0);
   Eigen::Isometry3d behind = Eigen::Isometry3d::Identity();
   behind.translation().z() = -4.0;
   const std::vector<std::optional<Eigen::Isometry3d>> poses = {Eigen::Isometry3d::Identity(),
