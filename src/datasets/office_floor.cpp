@@ -268,8 +268,7 @@ HallScene OfficeFloor::Scene(const OfficeOptions& options, std::uint64_t seed) {
   furnish({kitchen_x, kitchen_y, 0}, {kitchen_x + 0.7f, kitchen_y + 0.7f, 1.8f}, 1.0f, appliance);
   furnish({kitchen_x + 0.7f, kitchen_y, 0}, {kitchen_x + 4.2f, kitchen_y + 0.6f, 0.9f}, 0.9f, wood);
 
-  HallScene scene(std::move(boxes), std::move(palette.textures));
-  return scene;
+  return HallScene(std::move(boxes), std::move(palette.textures));
 }
 
 RoundedPath OfficeFloor::Path(RouteKind kind, const OfficeOptions& options) {

@@ -1,12 +1,8 @@
 // The office floor: a rendered world with the perceptual aliasing of a real building (identical
 // doors, blank walls), exact geometry, routes that keep to its corridors.
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "stereo_fabmap_slam/datasets/camera_renderer.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
@@ -20,11 +16,6 @@ namespace stereo_fabmap_slam::test {
 namespace {
 
 using namespace datasets;  // NOLINT: the module under test
-
-std::string FileBytes(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-}
 
 TEST(RoundedPath, ARectangleWithRoundedCornersIsWalkedAtItsLength) {
   // 10 x 4 m, corners of 1 m: each corner saves 2 m of legs and adds a quarter circle.
@@ -149,10 +140,10 @@ TEST(OfficeWorld, SameSeedSameBytesAtAnyResolution) {
   SyntheticSequence(options).Write(temp.path() + "/b");
   const std::string first =
       "/mav0/cam0/data/" + std::to_string(SyntheticSequence::kStartNs) + ".png";
-  EXPECT_EQ(FileBytes(temp.path() + "/a" + first), FileBytes(temp.path() + "/b" + first));
+  EXPECT_EQ(ReadTextFile(temp.path() + "/a" + first), ReadTextFile(temp.path() + "/b" + first));
   options.seed = 2;  // other posters, notice boards, art and paint
   SyntheticSequence(options).Write(temp.path() + "/c");
-  EXPECT_NE(FileBytes(temp.path() + "/a" + first), FileBytes(temp.path() + "/c" + first));
+  EXPECT_NE(ReadTextFile(temp.path() + "/a" + first), ReadTextFile(temp.path() + "/c" + first));
 
   // 512 x 384 with the field of view of the 752 x 480 rig, read back as any sequence.
   const EurocSequence sequence = EurocSequence::Open(temp.path() + "/a");
