@@ -12,12 +12,12 @@
 //   again, its new piece of odometry joined to it.
 #include <sys/wait.h>
 
-#include <atomic>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <csignal>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <map>
@@ -69,7 +69,7 @@ Eigen::Isometry3d PoseAt(const evaluation::Trajectory& trajectory, double time) 
 // one is first depends on the machine's load, so a test of the recovery accepts both.
 struct GraphPieces {
   int breaks = 0;
-  bool newest_in_map = false;     // the newest keyframe is joined to the map's first
+  bool newest_in_map = false;       // the newest keyframe is joined to the map's first
   int joining_relocalizations = 0;  // edges between different pieces, by type
   int joining_loops = 0;
 };
@@ -120,8 +120,8 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
 
   std::mutex mutex;
   double first_stamp = -1, last_stamp = -1;
-  int corrections = 0;          // map -> odom corrections seen
-  GraphPieces latest_pieces;    // of the latest map_graph
+  int corrections = 0;              // map -> odom corrections seen
+  GraphPieces latest_pieces;        // of the latest map_graph
   std::size_t graph_keyframes = 0;  // in the latest map_graph
   ros::NodeHandle node;
   const ros::Subscriber odometry_subscriber = node.subscribe<nav_msgs::Odometry>(
@@ -338,8 +338,7 @@ TEST(RelocalizationRos, KidnapRouteThroughTheNodelets) {
     std::lock_guard<std::mutex> lock(mutex);
     EXPECT_GT(graph_keyframes, early.response.keyframes);  // the map grows again
     EXPECT_TRUE(joined_after_break(latest_pieces));        // the new piece joined to it
-    RecordProperty("replay_joined_by_relocalization_edges",
-                   latest_pieces.joining_relocalizations);
+    RecordProperty("replay_joined_by_relocalization_edges", latest_pieces.joining_relocalizations);
   }
 
   kill(launch_pid, SIGINT);
