@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <limits>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -85,6 +86,7 @@ FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const Place
   std::vector<std::vector<int>> members;  // per place: its frames, in time order
   FabMapQueries run;
   std::vector<PlaceQueryResult>& results = run.results;
+  place_recognition::SequenceScore sequence(options.sequence);
   for (int j = 0; j < frames.size(); ++j) {
     PlaceQueryResult result = NewResult(frames, truth, j);
     const std::vector<int>& words = frames.word_sets[static_cast<std::size_t>(j)];
@@ -92,8 +94,19 @@ FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const Place
     std::vector<char> candidates(members.size());
     for (std::size_t p = 0; p < members.size(); ++p)
       candidates[p] = frames.IsCandidate(members[p].front(), j) ? 1 : 0;
+    // Each place's log odds against a new place (-infinity: no candidate), and what ranks
+    // them: the log odds themselves, or their sequence score.
+    std::vector<double> log_odds(members.size(), -std::numeric_limits<double>::infinity());
+    place_recognition::FabMapResult restricted;
     if (result.has_candidates) {
-      const place_recognition::FabMapResult restricted = fabmap->Compare(words, candidates);
+      restricted = fabmap->Compare(words, candidates);
+      for (std::size_t p = 0; p < members.size(); ++p) {
+        if (candidates[p]) log_odds[p] = restricted.CandidateLogOdds(static_cast<int>(p));
+      }
+    }
+    const bool by_sequence = options.sequence.length > 1;
+    const std::vector<double> ranking = by_sequence ? sequence.Push(log_odds) : log_odds;
+    if (result.has_candidates) {
       result.new_place_probability = restricted.new_place;
       // A place is a true answer when one of its frames outside the window shows the query's
       // place (frames are in time order: those outside the window come first).
@@ -107,18 +120,24 @@ FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const Place
       if (result.has_true_match) {
         result.true_candidate_rank = TrueCandidateRank(
             static_cast<int>(members.size()),
-            [&](int p) { return restricted.posterior[static_cast<std::size_t>(p)]; },
+            [&](int p) { return ranking[static_cast<std::size_t>(p)]; },
             [&](int p) {
-              return candidates[static_cast<std::size_t>(p)] &&
-                     restricted.posterior[static_cast<std::size_t>(p)] >= options.candidate_floor &&
-                     restricted.CandidateLogOdds(p) >= options.candidate_min_log_odds;
+              const auto i = static_cast<std::size_t>(p);
+              return candidates[i] &&
+                     (by_sequence || restricted.posterior[i] >= options.candidate_floor) &&
+                     ranking[i] >= options.candidate_min_log_odds;
             },
             place_is_true);
       }
-      if (restricted.best >= 0) {
-        result.best_place = restricted.best;
-        result.score = restricted.best_log_odds;
-        for (const int frame : members[static_cast<std::size_t>(restricted.best)]) {
+      int best = -1;
+      for (std::size_t p = 0; p < members.size(); ++p) {
+        if (candidates[p] && (best < 0 || ranking[p] > ranking[static_cast<std::size_t>(best)]))
+          best = static_cast<int>(p);
+      }
+      if (best >= 0) {
+        result.best_place = best;
+        result.score = ranking[static_cast<std::size_t>(best)];
+        for (const int frame : members[static_cast<std::size_t>(best)]) {
           if (!frames.IsCandidate(frame, j)) break;
           result.best_frame = frame;
           if (truth.Same(frame, j)) {

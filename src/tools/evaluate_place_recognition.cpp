@@ -45,7 +45,7 @@ constexpr char kUsage[] =
     "usage: evaluate_place_recognition ASL_DIR [--tau T] [--mutual] [--max-distance D]\n"
     "                                  [--exclude-seconds S]\n"
     "       evaluate_place_recognition IMAGE_DIR --gt FILE [--exclude-frames K]\n"
-    "           [--places per-image|update|both] [--every N] [--vocabulary FILE]\n"
+    "           [--places per-image|update|both] [--every N] [--sequence L] [--vocabulary FILE]\n"
     "           [--config FILE] [--fabmap-config FILE] [--output DIR] [--json]\n"
     "Each frame in turn is a query against the earlier frames' places; FAB-MAP answers with\n"
     "its best place and posterior, a plain tf-idf bag-of-words score over the same words with\n"
@@ -67,6 +67,9 @@ constexpr char kUsage[] =
     "  --places           per-image: every image a place of its own; update: FabMap::Add\n"
     "                     updates the best place when it matches; both (default)\n"
     "  --every N          every N-th frame only (default 1)\n"
+    "  --sequence L       FAB-MAP ranks places by the summed log odds along the best chain of\n"
+    "                     the last L queries over neighbouring places (temporal consistency;\n"
+    "                     default 1: each query alone)\n"
     "  --vocabulary FILE  vocabulary.bin with chow_liu_tree.bin and training_places.bin beside\n"
     "                     it (default: vocabulary_directory of config/fabmap.yaml); the training\n"
     "                     places also give tf-idf's inverse document frequencies\n"
@@ -379,12 +382,13 @@ int main(int argc, char** argv) {
   // from 20 m back "sees" the doors ahead and every frame of a long corridor is a revisit.
   relevance.max_distance = 3.0;
   double exclude_seconds = 5, exclude_frames = 5;
+  place_recognition::SequenceScoreOptions sequence;
   try {
-    args.emplace(
-        argc, argv,
-        std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames", "gt",
-                              "places", "every", "vocabulary", "config", "fabmap-config", "output"},
-        std::set<std::string>{"mutual", "json", "help"});
+    args.emplace(argc, argv,
+                 std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames",
+                                       "gt", "places", "every", "vocabulary", "config",
+                                       "fabmap-config", "output", "sequence"},
+                 std::set<std::string>{"mutual", "json", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -414,6 +418,10 @@ int main(int argc, char** argv) {
         (args->Value("tau") || args->Value("max-distance") || args->Flag("mutual")))
       throw std::invalid_argument(
           "--tau, --max-distance and --mutual are for sequences (ground truth from poses)");
+    const double sequence_number = args->NumberOr("sequence", 1);
+    if (sequence_number < 1 || sequence_number != std::floor(sequence_number))
+      throw std::invalid_argument("--sequence must be a whole number >= 1");
+    sequence.length = static_cast<int>(sequence_number);
     const std::string places = args->ValueOr("places", "both");
     if (places == "per-image" || places == "both")
       modes.push_back(evaluation::PlacesMode::kPerImage);
@@ -460,6 +468,7 @@ int main(int argc, char** argv) {
       query_options.match_log_odds = place_options.fabmap.match_log_odds;
       query_options.candidate_floor = options.loop_detection.min_probability;
       query_options.candidate_min_log_odds = options.loop_detection.min_log_odds;
+      query_options.sequence = sequence;
       evaluation::FabMapQueries queries = evaluation::RunFabMapQueries(
           input.frames, *input.truth, query_options, &fabmap, [&](int done, int total) {
             if (done % 500 == 0 || done == total)

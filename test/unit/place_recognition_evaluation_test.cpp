@@ -2,6 +2,7 @@
 // tf-idf baseline, the ground-truth matrix and poses, and the queries of FAB-MAP and tf-idf on
 // a hand-built case whose answers are known.
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 #include <set>
@@ -16,6 +17,7 @@
 #include "stereo_fabmap_slam/io/input_error.h"
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/sequence_score.h"
 #include "stereo_fabmap_slam/place_recognition/tf_idf_index.h"
 #include "test_support.h"
 
@@ -389,6 +391,82 @@ TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
   EXPECT_EQ(summary.queries_with_true_match, 10);
   EXPECT_DOUBLE_EQ(summary.recall_at_full_precision, 1.0);
   EXPECT_EQ(summary.declared_new, 0);  // tf-idf has no new-place decision
+}
+
+// A revisit run through places 2, 3, 4 (log odds 10 each), and at the last query a look-alike
+// at place 9 (15) where the earlier queries saw nothing like it (-20).
+TEST(SequenceScore, AChainOfNeighbouringMatchesOutranksALoneLookAlike) {
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<double>> queries(3, std::vector<double>(10, -20.0));
+  for (int t = 0; t < 3; ++t) queries[t][static_cast<std::size_t>(2 + t)] = 10;
+  queries[2][9] = 15;
+  queries[2][0] = -inf;  // no candidate (the recent past)
+  place_recognition::SequenceScore alone({1, 3});
+  std::vector<double> scores;
+  for (const auto& query : queries) scores = alone.Push(query);
+  EXPECT_EQ(scores, queries[2]);  // length 1: the log odds themselves
+
+  place_recognition::SequenceScore sequence({3, 1});
+  for (const auto& query : queries) scores = sequence.Push(query);
+  EXPECT_DOUBLE_EQ(scores[4], 30.0);                // 2 -> 3 -> 4
+  EXPECT_DOUBLE_EQ(scores[9], 15.0 - 20.0 - 20.0);  // nothing near 9 before
+  EXPECT_DOUBLE_EQ(scores[5], -60.0);  // a step past the run's end: from 4 at best, -40
+  EXPECT_EQ(scores[0], -inf);          // no candidate stays none
+  // A step of one place cannot join 2 -> 4 with the middle query at 2 (its match is 3), but
+  // the walk backwards 4 -> 3 -> 2 is a chain too.
+  place_recognition::SequenceScore backwards({3, 1});
+  for (int t = 0; t < 3; ++t) {
+    std::vector<double> query(10, -20.0);
+    query[static_cast<std::size_t>(4 - t)] = 10;
+    scores = backwards.Push(query);
+  }
+  EXPECT_DOUBLE_EQ(scores[2], 30.0);
+  // Places added since an earlier query add nothing there; a reset starts chains afresh.
+  backwards.Reset();
+  scores = backwards.Push(std::vector<double>(12, 1.0));
+  EXPECT_DOUBLE_EQ(scores[11], 1.0);
+  scores = backwards.Push(std::vector<double>(13, 1.0));
+  EXPECT_DOUBLE_EQ(scores[12], 1.0 + 1.0);  // place 11 is a step away
+  EXPECT_THROW(place_recognition::SequenceScore({0, 3}), std::invalid_argument);
+  EXPECT_THROW(place_recognition::SequenceScore({3, -1}), std::invalid_argument);
+}
+
+// The two passes, with frame 15 (a revisit of place 5) showing place 8's words instead: alone it
+// picks the look-alike, in a sequence of three the run 3 -> 4 -> 5 of its neighbours places it.
+TEST(PlaceRecognitionQueries, ASequenceOfQueriesOutranksALookAlike) {
+  TwoPasses passes = MakeTwoPasses();
+  passes.frames.word_sets[15] = passes.frames.word_sets[18];
+  passes.frames.words = passes.frames.word_sets;
+  const PlaceGroundTruth truth(passes.same);
+  const place_recognition::ChowLiuTree tree =
+      place_recognition::ChowLiuTree::Train(passes.training, 300);
+  place_recognition::FabMapOptions options;
+  evaluation::FabMapQueryOptions query_options;
+  {
+    place_recognition::FabMap fabmap(tree, options);
+    const auto results =
+        evaluation::RunFabMapQueries(passes.frames, truth, query_options, &fabmap).results;
+    EXPECT_EQ(results[15].best_frame, 8);
+    EXPECT_FALSE(results[15].is_true);
+  }
+  query_options.sequence.length = 3;
+  // Each hand-made place is a location of its own (unlike frames at 5 Hz, several a metre): a
+  // chain moves one place per query.
+  query_options.sequence.max_step = 1;
+  place_recognition::FabMap fabmap(tree, options);
+  const auto results =
+      evaluation::RunFabMapQueries(passes.frames, truth, query_options, &fabmap).results;
+  for (int j = 12; j < 20; ++j) {
+    SCOPED_TRACE(j);
+    const PlaceQueryResult& result = results[static_cast<std::size_t>(j)];
+    if (j == 15) {
+      // Its own words say nothing of place 5: the run places it, to within its step.
+      EXPECT_NEAR(result.best_frame, 5, 1);
+    } else {
+      EXPECT_EQ(result.best_frame, j - 10);
+      EXPECT_TRUE(result.is_true);
+    }
+  }
 }
 
 TEST(PlaceRecognitionQueries, CandidateRecallCountsTrueAnswersAmongTheBestK) {

@@ -7,6 +7,7 @@
 #include "stereo_fabmap_slam/evaluation/place_ground_truth.h"
 #include "stereo_fabmap_slam/evaluation/place_recognition_precision_recall.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
+#include "stereo_fabmap_slam/place_recognition/sequence_score.h"
 #include "stereo_fabmap_slam/place_recognition/tf_idf_index.h"
 
 namespace stereo_fabmap_slam::evaluation {
@@ -49,6 +50,10 @@ struct FabMapQueryOptions {
   double candidate_floor = 0;
   // ...and its floor on a candidate's log odds against a new place (loop_detection.min_log_odds).
   double candidate_min_log_odds = -std::numeric_limits<double>::infinity();
+  // Temporal consistency: with a length above 1, places are ranked by their sequence score
+  // (place_recognition::SequenceScore over the queries in time order), the score and
+  // candidate_min_log_odds apply to it, and the posterior floor, a single view's, is not used.
+  place_recognition::SequenceScoreOptions sequence;
 };
 
 struct FabMapQueries {
