@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -27,7 +28,8 @@ LoopDetector::LoopDetector(const LoopDetectorOptions& options, Vocabulary vocabu
       vocabulary_(std::move(vocabulary)),
       fabmap_(std::move(fabmap)),
       verifier_(camera, descriptor_norm, max_descriptor_distance),
-      vocabulary_fingerprint_(vocabulary_.Fingerprint()) {
+      vocabulary_fingerprint_(vocabulary_.Fingerprint()),
+      sequence_({options_.sequence_length, options_.sequence_max_step}) {
   if (fabmap_.model().size() != vocabulary_.size()) {
     throw std::invalid_argument("the Chow-Liu tree has " + std::to_string(fabmap_.model().size()) +
                                 " words, the vocabulary " + std::to_string(vocabulary_.size()) +
@@ -103,36 +105,54 @@ void LoopDetector::AddPlace(const map::StoredKeyframe& stored) {
   place_keyframes_.push_back(stored.keyframe.id);
 }
 
-PlaceQuery LoopDetector::Candidates(const std::vector<int>& words,
-                                    const std::function<bool(const map::StoredKeyframe&)>& allowed,
-                                    int max_candidates, double min_probability,
-                                    double min_log_odds) const {
-  PlaceQuery query;
+std::vector<char> LoopDetector::AllowedPlaces(
+    const std::function<bool(const map::StoredKeyframe&)>& allowed) const {
   std::vector<char> mask(place_keyframes_.size(), 0);
   for (std::size_t i = 0; i < place_keyframes_.size(); ++i) {
     mask[i] = allowed(database_.Get(place_keyframes_[i])) ? 1 : 0;
   }
-  query.places_compared = static_cast<int>(std::count(mask.begin(), mask.end(), 1));
-  if (query.places_compared == 0 || words.empty()) return query;
-  const FabMapResult result = fabmap_.Compare(words, mask);
+  return mask;
+}
+
+PlaceQuery LoopDetector::Ranked(const FabMapResult& result, const std::vector<char>& mask,
+                                const std::vector<double>& score,
+                                const std::function<bool(std::size_t)>& eligible,
+                                int max_candidates) const {
+  PlaceQuery query;
   query.new_place_probability = result.new_place;
+  query.places_compared = static_cast<int>(std::count(mask.begin(), mask.end(), 1));
   std::vector<int> order;
   for (std::size_t i = 0; i < mask.size(); ++i) {
-    if (mask[i] && result.posterior[i] >= min_probability &&
-        result.CandidateLogOdds(static_cast<int>(i)) >= min_log_odds) {
-      order.push_back(static_cast<int>(i));
-    }
+    if (mask[i] && eligible(i)) order.push_back(static_cast<int>(i));
   }
-  // Best first; equal posteriors in map order, so that the result is deterministic.
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return result.posterior[a] > result.posterior[b] ||
-           (result.posterior[a] == result.posterior[b] && a < b);
-  });
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return score[a] > score[b] || (score[a] == score[b] && a < b); });
   if (static_cast<int>(order.size()) > max_candidates) order.resize(max_candidates);
   for (const int place : order) {
     query.candidates.push_back({place_keyframes_[place], result.posterior[place]});
   }
   return query;
+}
+
+PlaceQuery LoopDetector::Candidates(const std::vector<int>& words,
+                                    const std::function<bool(const map::StoredKeyframe&)>& allowed,
+                                    int max_candidates, double min_probability,
+                                    double min_log_odds) const {
+  const std::vector<char> mask = AllowedPlaces(allowed);
+  if (std::count(mask.begin(), mask.end(), 1) == 0 || words.empty()) {
+    PlaceQuery query;
+    query.places_compared = static_cast<int>(std::count(mask.begin(), mask.end(), 1));
+    return query;
+  }
+  const FabMapResult result = fabmap_.Compare(words, mask);
+  // Best posterior first, which is the order of the log odds too.
+  return Ranked(
+      result, mask, result.posterior,
+      [&](std::size_t i) {
+        return result.posterior[i] >= min_probability &&
+               result.CandidateLogOdds(static_cast<int>(i)) >= min_log_odds;
+      },
+      max_candidates);
 }
 
 LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
@@ -145,8 +165,36 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
     return place.keyframe.id != query.keyframe.id &&
            std::abs(place.keyframe.timestamp - query_time) >= options_.min_age;
   };
-  const PlaceQuery places = Candidates(query.words, old_enough, options_.max_candidates,
-                                       options_.min_probability, options_.min_log_odds);
+  PlaceQuery places;
+  // A stored keyframe queried for the first time extends the sequence of its segment; without a
+  // sequence (off, a view that is not stored, a repeated query) one view ranks alone.
+  const bool extends_sequence =
+      options_.sequence_length > 1 && query.segment >= 0 && query.keyframe.id > sequence_last_id_;
+  if (!extends_sequence) {
+    places = Candidates(query.words, old_enough, options_.max_candidates, options_.min_probability,
+                        options_.min_log_odds);
+  } else {
+    const std::vector<char> mask = AllowedPlaces(old_enough);
+    std::vector<double> log_odds(mask.size(), -std::numeric_limits<double>::infinity());
+    FabMapResult result;
+    result.posterior.assign(mask.size(), 0.0);
+    if (std::count(mask.begin(), mask.end(), 1) > 0 && !query.words.empty()) {
+      result = fabmap_.Compare(query.words, mask);
+      for (std::size_t i = 0; i < mask.size(); ++i) {
+        if (mask[i]) log_odds[i] = result.CandidateLogOdds(static_cast<int>(i));
+      }
+    }
+    if (query.segment != sequence_segment_) sequence_.Reset();
+    sequence_segment_ = query.segment;
+    sequence_last_id_ = query.keyframe.id;
+    sequence_scores_ = sequence_.Push(log_odds);
+    places = Ranked(
+        result, mask, sequence_scores_,
+        [&](std::size_t i) {
+          return std::isfinite(sequence_scores_[i]) && sequence_scores_[i] >= options_.min_log_odds;
+        },
+        options_.max_candidates);
+  }
   detection.new_place_probability = places.new_place_probability;
   detection.places_compared = places.places_compared;
   // Verified best posterior first, until one is accepted (as ORB-SLAM verifies its candidates):

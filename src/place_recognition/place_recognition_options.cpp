@@ -71,6 +71,8 @@ void LoopDetectorOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_probability", &min_probability);
   visitor.Visit("min_log_odds", &min_log_odds);
   visitor.Visit("max_candidates", &max_candidates);
+  visitor.Visit("sequence_length", &sequence_length);
+  visitor.Visit("sequence_max_step", &sequence_max_step);
   visitor.Visit("match_ratio", &match_ratio);
   io::VisitEnum(visitor, "pnp_kernel", &pnp_kernel, geometry::kPnpKernelNames);
   visitor.Visit("ransac_threshold", &ransac_threshold);
@@ -93,6 +95,10 @@ void LoopDetectorOptions::Validate() const {
   if (std::isnan(min_log_odds) || min_log_odds == std::numeric_limits<double>::infinity())
     throw std::invalid_argument("loop_detection.min_log_odds must be a number (or -inf)");
   if (max_candidates < 1) throw std::invalid_argument("loop_detection.max_candidates must be >= 1");
+  if (sequence_length < 1 || sequence_max_step < 0) {
+    throw std::invalid_argument(
+        "loop_detection.sequence_length must be >= 1 and sequence_max_step >= 0");
+  }
   if (!(match_ratio > 0 && match_ratio <= 1)) {
     throw std::invalid_argument("loop_detection.match_ratio must lie in (0, 1]");
   }

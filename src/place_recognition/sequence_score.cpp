@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -39,7 +38,11 @@ std::vector<double> SequenceScore::Push(const std::vector<double>& log_odds) {
   const long step = options_.max_step;
   for (std::size_t k = 0; k < history_.size(); ++k) {
     for (long p = 0; p < places; ++p) {
-      double previous = k == 0 ? 0.0 : -std::numeric_limits<double>::infinity();
+      // A chain may start at any query: the earlier views may have shown new places, whose log
+      // odds against a new place are 0 (Smith-Waterman's local alignment). So a revisit that
+      // begins now, or a place whose neighbours lie far apart in the map (where a lap closes),
+      // keeps at least its own evidence.
+      double previous = 0.0;
       if (k > 0) {
         for (long q = std::max(0L, p - step); q <= std::min(places - 1, p + step); ++q) {
           previous = std::max(previous, best[static_cast<std::size_t>(q)]);

@@ -68,8 +68,9 @@ constexpr char kUsage[] =
     "                     updates the best place when it matches; both (default)\n"
     "  --every N          every N-th frame only (default 1)\n"
     "  --sequence L       FAB-MAP ranks places by the summed log odds along the best chain of\n"
-    "                     the last L queries over neighbouring places (temporal consistency;\n"
-    "                     default 1: each query alone)\n"
+    "                     the last L queries over neighbouring places, as the loop detector\n"
+    "                     does (default: loop_detection.sequence_length of the config; 1: each\n"
+    "                     query alone)\n"
     "  --vocabulary FILE  vocabulary.bin with chow_liu_tree.bin and training_places.bin beside\n"
     "                     it (default: vocabulary_directory of config/fabmap.yaml); the training\n"
     "                     places also give tf-idf's inverse document frequencies\n"
@@ -80,9 +81,10 @@ constexpr char kUsage[] =
     "FAB-MAP's answers are ranked by their log odds against a new place; precision and recall\n"
     "at fabmap.match_log_odds (the default threshold, 0) are reported beside the curve.\n"
     "What the loop detector needs: candidate recall @1/3/5 (of the queries with a true match,\n"
-    "those whose true place is among FAB-MAP's K best candidates of posterior at least\n"
-    "loop_detection.min_probability, which the detector verifies geometrically; tf-idf: its K\n"
-    "best images); and for FAB-MAP's places the count, the largest place's share of all frames\n"
+    "those whose true place is among FAB-MAP's K best candidates as the loop detector picks\n"
+    "them for geometric verification: by sequence score (or, with a sequence of 1, posterior at\n"
+    "least loop_detection.min_probability) of at least loop_detection.min_log_odds; tf-idf: its\n"
+    "K best images); and for FAB-MAP's places the count, the largest place's share of all frames\n"
     "and the mean number of places among the frames of a revisited location (1 is ideal).\n";
 
 double NowSeconds() {
@@ -382,7 +384,7 @@ int main(int argc, char** argv) {
   // from 20 m back "sees" the doors ahead and every frame of a long corridor is a revisit.
   relevance.max_distance = 3.0;
   double exclude_seconds = 5, exclude_frames = 5;
-  place_recognition::SequenceScoreOptions sequence;
+  std::optional<int> sequence_length;  // --sequence; else the loop detector's
   try {
     args.emplace(argc, argv,
                  std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames",
@@ -418,10 +420,12 @@ int main(int argc, char** argv) {
         (args->Value("tau") || args->Value("max-distance") || args->Flag("mutual")))
       throw std::invalid_argument(
           "--tau, --max-distance and --mutual are for sequences (ground truth from poses)");
-    const double sequence_number = args->NumberOr("sequence", 1);
-    if (sequence_number < 1 || sequence_number != std::floor(sequence_number))
-      throw std::invalid_argument("--sequence must be a whole number >= 1");
-    sequence.length = static_cast<int>(sequence_number);
+    if (args->Value("sequence")) {
+      const double sequence_number = args->NumberOr("sequence", 1);
+      if (sequence_number < 1 || sequence_number != std::floor(sequence_number))
+        throw std::invalid_argument("--sequence must be a whole number >= 1");
+      sequence_length = static_cast<int>(sequence_number);
+    }
     const std::string places = args->ValueOr("places", "both");
     if (places == "per-image" || places == "both")
       modes.push_back(evaluation::PlacesMode::kPerImage);
@@ -468,7 +472,9 @@ int main(int argc, char** argv) {
       query_options.match_log_odds = place_options.fabmap.match_log_odds;
       query_options.candidate_floor = options.loop_detection.min_probability;
       query_options.candidate_min_log_odds = options.loop_detection.min_log_odds;
-      query_options.sequence = sequence;
+      query_options.sequence.length =
+          sequence_length.value_or(options.loop_detection.sequence_length);
+      query_options.sequence.max_step = options.loop_detection.sequence_max_step;
       evaluation::FabMapQueries queries = evaluation::RunFabMapQueries(
           input.frames, *input.truth, query_options, &fabmap, [&](int done, int total) {
             if (done % 500 == 0 || done == total)

@@ -6,6 +6,8 @@
 #include "stereo_fabmap_slam/place_recognition/loop_detector.h"
 
 #include <algorithm>
+#include <limits>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -20,11 +22,13 @@ using place_recognition::LoopCandidate;
 using place_recognition::LoopDetection;
 
 // A small vocabulary and Chow-Liu tree trained on random descriptors: FAB-MAP is not what these
-// tests measure (every stored keyframe is verified: min_probability 0).
+// tests measure (every stored keyframe is verified: no floor, one view ranks alone).
 place_recognition::LoopDetector MakeDetector() {
   place_recognition::LoopDetectorOptions options;
   options.min_age = 5.0;
   options.min_probability = 0.0;
+  options.min_log_odds = -std::numeric_limits<double>::infinity();
+  options.sequence_length = 1;
   options.max_candidates = 5;
   return ToyLoopDetector(11, options);
 }
@@ -187,6 +191,74 @@ TEST(LoopDetector, RecentKeyframesAreNoCandidates) {
   const LoopDetection detection =
       detector.Process(MakeKeyframe(1, 2.0, world, At(0.1, 0, 0), At(0.1, 0, 0)));
   EXPECT_TRUE(detection.candidates.empty());
+}
+
+// Views whose words tell places apart: a vocabulary of 64 words, and each place 20 random
+// descriptors of its own (two places share about 20 x 20 / 64 of their words by chance).
+cv::Mat RandomDescriptors(int rows, std::uint64_t seed) {
+  cv::Mat descriptors(rows, 64, CV_8U);
+  cv::RNG rng(seed);
+  rng.fill(descriptors, cv::RNG::UNIFORM, 0, 256);
+  return descriptors;
+}
+
+place_recognition::LoopDetector DetectorWithDistinctPlaces(
+    const place_recognition::LoopDetectorOptions& options) {
+  place_recognition::VocabularyOptions vocabulary_options;
+  vocabulary_options.branching = 8;
+  vocabulary_options.depth = 2;
+  place_recognition::Vocabulary vocabulary =
+      place_recognition::Vocabulary::Train(RandomDescriptors(1600, 3), vocabulary_options);
+  std::vector<std::vector<int>> word_sets;
+  for (int image = 0; image < 60; ++image) {
+    word_sets.push_back(vocabulary.WordSet(RandomDescriptors(20, 1000 + image)));
+  }
+  place_recognition::FabMap fabmap(
+      place_recognition::ChowLiuTree::Train(word_sets, vocabulary.size()),
+      place_recognition::FabMapOptions());
+  return place_recognition::LoopDetector(options, std::move(vocabulary), std::move(fabmap),
+                                         kTestCamera, cv::NORM_HAMMING, 60.0);
+}
+
+// A corridor walked twice: places 0-7, then views of places 2, 3 and 4 again, then a view at
+// place 5 that shows place 7's words (a poster hung at both). Alone, the look-alike is the best
+// candidate; in a sequence, the run of revisits places it (to within the chain's step: its own
+// words cannot say where in the run it is); a new odometry segment starts its chain afresh, and
+// the look-alike is the best again.
+TEST(LoopDetector, ASequenceOfKeyframesOutranksALookAlike) {
+  const StereoWorld world = PosterWorld();
+  const auto keyframe = [&](std::int64_t id, double time, std::uint64_t place, bool new_segment) {
+    map::Keyframe frame = MakeKeyframe(id, time, world, At(0, 0, 0), At(0, 0, 0), new_segment);
+    frame.place_descriptors = RandomDescriptors(20, 100 + place);
+    return frame;
+  };
+  place_recognition::LoopDetectorOptions options;
+  options.min_age = 5.0;
+  options.min_probability = 0.0;
+  options.min_log_odds = -std::numeric_limits<double>::infinity();
+  options.max_candidates = 3;
+  options.sequence_max_step = 1;  // these places are a location each, not frames a metre apart
+  for (const bool new_segment : {false, true}) {
+    for (const int length : {1, 3}) {
+      SCOPED_TRACE("sequence of " + std::to_string(length) +
+                   (new_segment ? ", the look-alike in a new segment" : ""));
+      options.sequence_length = length;
+      place_recognition::LoopDetector detector = DetectorWithDistinctPlaces(options);
+      for (int place = 0; place < 8; ++place)
+        detector.Process(keyframe(place, place, place, false));
+      for (int k = 0; k < 3; ++k) detector.Process(keyframe(8 + k, 20 + k, 2 + k, false));
+      const LoopDetection detection = detector.Process(keyframe(11, 23, 7, new_segment));
+      ASSERT_FALSE(detection.candidates.empty());
+      const std::int64_t best = detection.candidates.front().keyframe_id;
+      if (length == 1 || new_segment) {
+        EXPECT_EQ(best, 7);
+      } else {
+        // Its own words say nothing of place 5: the chain ends within a step of the run's
+        // last place, 4.
+        EXPECT_NEAR(best, 4, 1);
+      }
+    }
+  }
 }
 
 TEST(LoopDetector, PlaceDescriptorsOfAnotherTypeAreRefused) {

@@ -408,9 +408,11 @@ TEST(SequenceScore, AChainOfNeighbouringMatchesOutranksALoneLookAlike) {
 
   place_recognition::SequenceScore sequence({3, 1});
   for (const auto& query : queries) scores = sequence.Push(query);
-  EXPECT_DOUBLE_EQ(scores[4], 30.0);                // 2 -> 3 -> 4
-  EXPECT_DOUBLE_EQ(scores[9], 15.0 - 20.0 - 20.0);  // nothing near 9 before
-  EXPECT_DOUBLE_EQ(scores[5], -60.0);  // a step past the run's end: from 4 at best, -40
+  EXPECT_DOUBLE_EQ(scores[4], 30.0);  // 2 -> 3 -> 4
+  // The look-alike keeps its own view's log odds (a chain may start at any query: the views
+  // before it showed new places), and nothing near it before adds to them.
+  EXPECT_DOUBLE_EQ(scores[9], 15.0);
+  EXPECT_DOUBLE_EQ(scores[5], -20.0);  // a step past the run's end: no chain reaches it
   EXPECT_EQ(scores[0], -inf);          // no candidate stays none
   // A step of one place cannot join 2 -> 4 with the middle query at 2 (its match is 3), but
   // the walk backwards 4 -> 3 -> 2 is a chain too.

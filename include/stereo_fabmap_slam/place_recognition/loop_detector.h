@@ -14,6 +14,7 @@
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
 #include "stereo_fabmap_slam/place_recognition/geometric_verification.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
+#include "stereo_fabmap_slam/place_recognition/sequence_score.h"
 #include "stereo_fabmap_slam/place_recognition/vocabulary.h"
 
 namespace stereo_fabmap_slam::place_recognition {
@@ -104,6 +105,14 @@ class LoopDetector {
   void AddPlace(const map::StoredKeyframe& stored);
   LoopCandidate Verify(const map::StoredKeyframe& query,
                        const map::StoredKeyframe& candidate) const;
+  // The query's FAB-MAP comparison over the allowed keyframes (mask: one per place).
+  std::vector<char> AllowedPlaces(
+      const std::function<bool(const map::StoredKeyframe&)>& allowed) const;
+  // The best `max_candidates` places of `mask` by `score` that `eligible` accepts, best first
+  // (equal scores in map order, so that the result is deterministic).
+  PlaceQuery Ranked(const FabMapResult& result, const std::vector<char>& mask,
+                    const std::vector<double>& score,
+                    const std::function<bool(std::size_t)>& eligible, int max_candidates) const;
 
   LoopDetectorOptions options_;
   Vocabulary vocabulary_;
@@ -112,6 +121,12 @@ class LoopDetector {
   std::uint64_t vocabulary_fingerprint_;
   map::KeyframeDatabase database_;
   std::vector<std::int64_t> place_keyframes_;  // FAB-MAP place index -> keyframe id
+  // Temporal consistency over the stored keyframes queried in order, one odometry segment at a
+  // time (sequence_length 1: off).
+  SequenceScore sequence_;
+  std::int64_t sequence_segment_ = -1;
+  std::int64_t sequence_last_id_ = -1;
+  std::vector<double> sequence_scores_;  // of sequence_last_id_'s query
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition

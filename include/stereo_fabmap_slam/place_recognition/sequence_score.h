@@ -11,9 +11,11 @@ namespace stereo_fabmap_slam::place_recognition {
 // (against a new place) along the best chain of the last `length` queries that ends at the
 // place, each step moving at most `max_step` places back or forward (places in the order they
 // were added: consecutive keyframes or images; forward and back, so that a corridor walked the
-// other way counts too). Under FAB-MAP's independence of views, that sum is the log odds of
-// "these views show this chain of places" against "they show new places", so 0 keeps its
-// meaning as a threshold.
+// other way counts too). A chain may begin at any of those queries (the views before it showed
+// new places: log odds 0), so a place never scores below its own view's log odds, and a run of
+// matches adds up. Under FAB-MAP's independence of views, the sum is the log odds of "these
+// views show this chain of places" against "they show new places", so 0 keeps its meaning as a
+// threshold.
 struct SequenceScoreOptions {
   // Queries in a chain; 1 scores each query alone (the sequence is off).
   int length = 1;
