@@ -187,24 +187,24 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
     if (query.segment != sequence_segment_) sequence_.Reset();
     sequence_segment_ = query.segment;
     sequence_last_id_ = query.keyframe.id;
-    sequence_scores_ = sequence_.Push(log_odds);
+    const std::vector<double> scores = sequence_.Push(log_odds);
     places = Ranked(
-        result, mask, sequence_scores_,
+        result, mask, scores,
         [&](std::size_t i) {
-          return std::isfinite(sequence_scores_[i]) && sequence_scores_[i] >= options_.min_log_odds;
+          return std::isfinite(scores[i]) && scores[i] >= options_.min_log_odds;
         },
         options_.max_candidates);
   }
   detection.new_place_probability = places.new_place_probability;
   detection.places_compared = places.places_compared;
-  // Verified best posterior first, until one is accepted (as ORB-SLAM verifies its candidates):
+  // Verified best first, until one is accepted (as ORB-SLAM verifies its candidates):
   // verification is most of a detection's time (descriptor matching, PnP RANSAC, refinement),
   // and on a route driven again the first candidate is the place in nearly every keyframe.
   for (const PlaceCandidate& place : places.candidates) {
     LoopCandidate verified;
     if (detection.loop) {
       verified.keyframe_id = place.keyframe_id;
-      verified.reason = "not verified: a candidate of higher posterior was accepted";
+      verified.reason = "not verified: a candidate ranked higher was accepted";
     } else {
       verified = Verify(query, database_.Get(place.keyframe_id));
     }

@@ -48,7 +48,7 @@ struct LoopDetection {
   std::int64_t query_id = -1;
   double new_place_probability = 1;
   int places_compared = 0;                // keyframes old enough to be loops
-  std::vector<LoopCandidate> candidates;  // best FAB-MAP posterior first
+  std::vector<LoopCandidate> candidates;  // best first (sequence score, or posterior alone)
   // The first candidate accepted, if any; the candidates after it are not verified.
   std::optional<map::LoopEdge> loop;
 };
@@ -105,7 +105,7 @@ class LoopDetector {
   void AddPlace(const map::StoredKeyframe& stored);
   LoopCandidate Verify(const map::StoredKeyframe& query,
                        const map::StoredKeyframe& candidate) const;
-  // The query's FAB-MAP comparison over the allowed keyframes (mask: one per place).
+  // Which places `allowed` accepts: one flag per FAB-MAP place.
   std::vector<char> AllowedPlaces(
       const std::function<bool(const map::StoredKeyframe&)>& allowed) const;
   // The best `max_candidates` places of `mask` by `score` that `eligible` accepts, best first
@@ -125,8 +125,7 @@ class LoopDetector {
   // time (sequence_length 1: off).
   SequenceScore sequence_;
   std::int64_t sequence_segment_ = -1;
-  std::int64_t sequence_last_id_ = -1;
-  std::vector<double> sequence_scores_;  // of sequence_last_id_'s query
+  std::int64_t sequence_last_id_ = -1;  // the newest keyframe in the sequence
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition
