@@ -414,8 +414,7 @@ TEST(SequenceScore, AChainOfNeighbouringMatchesOutranksALoneLookAlike) {
   EXPECT_DOUBLE_EQ(scores[9], 15.0);
   EXPECT_DOUBLE_EQ(scores[5], -20.0);  // a step past the run's end: no chain reaches it
   EXPECT_EQ(scores[0], -inf);          // no candidate stays none
-  // A step of one place cannot join 2 -> 4 with the middle query at 2 (its match is 3), but
-  // the walk backwards 4 -> 3 -> 2 is a chain too.
+  // A run walked the other way, 4 -> 3 -> 2, is a chain too.
   place_recognition::SequenceScore backwards({3, 1});
   for (int t = 0; t < 3; ++t) {
     std::vector<double> query(10, -20.0);
