@@ -190,10 +190,8 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
     const std::vector<double> scores = sequence_.Push(log_odds);
     places = Ranked(
         result, mask, scores,
-        [&](std::size_t i) {
-          return std::isfinite(scores[i]) && scores[i] >= options_.min_log_odds;
-        },
-        options_.max_candidates);
+        // Allowed places have finite log odds, so finite scores.
+        [&](std::size_t i) { return scores[i] >= options_.min_log_odds; }, options_.max_candidates);
   }
   detection.new_place_probability = places.new_place_probability;
   detection.places_compared = places.places_compared;

@@ -108,38 +108,32 @@ int main(int argc, char** argv) {
     FabMap fabmap(tree, FabMapOptions{});
     fabmap.SetPlaces(map);
     fabmap.Compare(queries[0]);  // warm caches
-    std::vector<double> times;
-    for (const auto& query : queries) {
-      const auto query_start = Clock::now();
-      fabmap.Compare(query);
-      times.push_back(Seconds(query_start) * 1000.0);
-    }
-    const double mean =
-        std::accumulate(times.begin(), times.end(), 0.0) / static_cast<double>(times.size());
-    const double slowest = *std::max_element(times.begin(), times.end());
-    std::printf(
-        "| FAB-MAP 2.0 query, 1,000 words seen, %d places%s: mean (slowest of %zu) | "
-        "%.2f ms (%.2f) |\n",
-        map.size(), what, times.size(), mean, slowest);
+    // Each query timed on its own: the mean and the slowest of them, as a table row.
+    const auto time_each = [&](const char* label, const auto& run) {
+      std::vector<double> times;
+      for (const auto& query : queries) {
+        const auto query_start = Clock::now();
+        run(query);
+        times.push_back(Seconds(query_start) * 1000.0);
+      }
+      std::printf(
+          "| %s, %d places%s: mean (slowest of %zu) | %.2f ms (%.2f) |\n", label, map.size(), what,
+          times.size(),
+          std::accumulate(times.begin(), times.end(), 0.0) / static_cast<double>(times.size()),
+          *std::max_element(times.begin(), times.end()));
+    };
+    time_each("FAB-MAP 2.0 query, 1,000 words seen",
+              [&](const std::vector<int>& query) { fabmap.Compare(query); });
     // What the loop detector does per keyframe (loop_detection.sequence_length 5): the query,
     // each place's log odds and their chains over the last 5 queries.
     SequenceScore sequence({5, 3});
-    times.clear();
-    for (const auto& query : queries) {
-      const auto query_start = Clock::now();
+    time_each("the same with the sequence score of 5 queries", [&](const std::vector<int>& query) {
       const FabMapResult result = fabmap.Compare(query);
       std::vector<double> log_odds(result.log_likelihoods.size());
       for (std::size_t p = 0; p < log_odds.size(); ++p)
         log_odds[p] = result.CandidateLogOdds(static_cast<int>(p));
       sequence.Push(log_odds);
-      times.push_back(Seconds(query_start) * 1000.0);
-    }
-    std::printf(
-        "| the same with the sequence score of 5 queries, %d places%s: mean (slowest of %zu) | "
-        "%.2f ms (%.2f) |\n",
-        map.size(), what, times.size(),
-        std::accumulate(times.begin(), times.end(), 0.0) / static_cast<double>(times.size()),
-        *std::max_element(times.begin(), times.end()));
+    });
   };
   for (const int places : {1000, 100000}) {
     PlaceDatabase map(kVocabulary);

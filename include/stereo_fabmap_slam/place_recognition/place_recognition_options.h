@@ -105,10 +105,12 @@ struct LoopDetectorOptions {
   // neighbouring keyframes (at most sequence_max_step apart per keyframe); min_log_odds applies
   // to that sum, and min_probability, one view's posterior, does not: the chain is what picks
   // the place out of look-alikes a single view cannot tell apart (identical doors, a poster
-  // hung on several walls). 5 keyframes (about 1.25 m of path at keyframes.max_translation
-  // 0.25 m): measured against 1, 3, 8 and 12 on the office, hall and EuRoC sequences
-  // (docs/place_recognition.md); 8 ranks better in the office but moved the kidnap route's
-  // loops. A step of 3 keyframes outruns any walking or flying revisit.
+  // hung on several walls). 5 keyframes, about 1.25 m of path at keyframes.max_translation
+  // 0.25 m: from 3 on, one look-alike view cannot outweigh a run; longer chains also add up
+  // runs of near-duplicate views (a hovering camera) and corridors that look alike for metres,
+  // and take longer to form after a route rejoins an old one. Not the best length on any one
+  // sequence measured (docs/place_recognition.md: 8 ranks the office better, 3 MH01). A step
+  // of 3 keyframes outruns any walking or flying revisit.
   int sequence_length = 5;
   int sequence_max_step = 3;
   // Geometric verification: query key points matched by descriptor to the candidate's stereo

@@ -39,8 +39,6 @@ class SequenceScore {
   // The sequence of views is broken (tracking lost, a new map): chains start afresh.
   void Reset() { history_.clear(); }
 
-  const SequenceScoreOptions& options() const { return options_; }
-
  private:
   SequenceScoreOptions options_;
   std::deque<std::vector<double>> history_;  // the last `length` queries' log odds, oldest first
