@@ -19,6 +19,11 @@ void CheckSizes(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& tr
                                 " word lists, " + std::to_string(frames.word_sets.size()) +
                                 " word sets and a ground truth of " + std::to_string(truth.size()));
   }
+  if (!frames.odometry_poses.empty() && frames.odometry_poses.size() != n) {
+    throw std::invalid_argument("place recognition queries: " + std::to_string(n) +
+                                " frames, but " + std::to_string(frames.odometry_poses.size()) +
+                                " odometry poses");
+  }
 }
 
 // What every method's result shares: whether the query can have a loop, and has a true one.
@@ -149,9 +154,15 @@ FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const Place
     }
     if (options.mode == PlacesMode::kUpdate) {
       int place = -1;
-      fabmap->Add(words, &place);
-      result.declared_new = place == static_cast<int>(members.size());
-      if (result.declared_new) members.emplace_back();
+      const place_recognition::FabMapResult full =
+          frames.odometry_poses.empty()
+              ? fabmap->Add(words, &place)
+              : fabmap->Add(words, frames.odometry_poses[static_cast<std::size_t>(j)], &place);
+      // Declared by appearance over the whole map, as with one place per image; which place
+      // takes the view is the map's business (with odometry, a look-alike place far away does
+      // not, and the view founds one of its own).
+      result.declared_new = full.best < 0 || full.best_log_odds < options.match_log_odds;
+      if (place == static_cast<int>(members.size())) members.emplace_back();
       members[static_cast<std::size_t>(place)].push_back(j);
       run.place_of_frame.push_back(place);
     } else {

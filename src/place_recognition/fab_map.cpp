@@ -99,6 +99,7 @@ void FabMap::SetPlaces(PlaceDatabase places) {
     const std::vector<std::int32_t>& words = places_.database.place(i).words;
     first_views_.emplace_back(words.begin(), words.end());
   }
+  founded_at_.assign(first_views_.size(), std::nullopt);
   last_match_ = -1;
 }
 
@@ -370,6 +371,7 @@ int FabMap::AddPlace(const std::vector<int>& words) {
   const int index = places_.database.AddPlace(words);
   places_.hit_sums.push_back(HitSum(places_.database.place(index)));
   first_views_.push_back(words);
+  founded_at_.emplace_back();
   return index;
 }
 
@@ -381,19 +383,38 @@ double FabMap::FirstViewLogLikelihood(int place, const Query& query) const {
   return LogLikelihoods(first, query).front();
 }
 
-FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
-  FabMapResult result = Compare(words);
-  bool update = result.best >= 0 && result.best_log_odds >= options_.match_log_odds;
-  if (update && options_.update_near_first_view) {
-    // The same log odds with the place's first view in place of the place.
-    const double first = FirstViewLogLikelihood(result.best, Prepare(words));
-    update = result.best_log_odds + first -
-                 result.log_likelihoods[static_cast<std::size_t>(result.best)] >=
-             options_.match_log_odds;
+int FabMap::PlaceToUpdate(const std::vector<int>& words, const FabMapResult& result,
+                          const std::vector<char>& eligible) const {
+  if (result.best < 0) return -1;
+  // The best place when it may take the view, with its log odds as Compare gave them (location
+  // prior included); otherwise the likeliest of those that may, each on its own evidence.
+  int best = result.best;
+  double log_odds = result.best_log_odds;
+  if (!eligible[static_cast<std::size_t>(best)]) {
+    best = -1;
+    for (std::size_t i = 0; i < eligible.size(); ++i) {
+      if (eligible[i] && (best < 0 || result.log_likelihoods[i] >
+                                          result.log_likelihoods[static_cast<std::size_t>(best)]))
+        best = static_cast<int>(i);
+    }
+    if (best < 0) return -1;
+    log_odds = result.CandidateLogOdds(best);
   }
+  if (log_odds < options_.match_log_odds) return -1;
+  if (options_.update_near_first_view) {
+    // The same log odds with the place's first view in place of the place.
+    const double first = FirstViewLogLikelihood(best, Prepare(words));
+    if (log_odds + first - result.log_likelihoods[static_cast<std::size_t>(best)] <
+        options_.match_log_odds)
+      return -1;
+  }
+  return best;
+}
+
+void FabMap::Insert(const std::vector<int>& words, int update, int* place) {
   int index;
-  if (update) {
-    index = result.best;
+  if (update >= 0) {
+    index = update;
     places_.database.UpdatePlace(index, words);
     places_.hit_sums[static_cast<std::size_t>(index)] = HitSum(places_.database.place(index));
   } else {
@@ -401,6 +422,35 @@ FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
   }
   last_match_ = index;
   if (place != nullptr) *place = index;
+}
+
+FabMapResult FabMap::Add(const std::vector<int>& words, int* place) {
+  FabMapResult result = Compare(words);
+  // Places founded with a position belong to Add with positions; appearance alone decides
+  // among the others.
+  std::vector<char> eligible(founded_at_.size());
+  for (std::size_t i = 0; i < founded_at_.size(); ++i) eligible[i] = !founded_at_[i];
+  Insert(words, PlaceToUpdate(words, result, eligible), place);
+  return result;
+}
+
+FabMapResult FabMap::Add(const std::vector<int>& words, const ViewPose& where, int* place) {
+  FabMapResult result = Compare(words);
+  std::vector<char> eligible(founded_at_.size(), 0);
+  if (where.segment >= 0) {
+    const double min_axis_cosine = std::cos(options_.max_place_turn_deg * M_PI / 180.0);
+    const Eigen::Vector3d axis = where.T_world_camera.linear().col(2);
+    for (std::size_t i = 0; i < founded_at_.size(); ++i) {
+      const std::optional<ViewPose>& founded = founded_at_[i];
+      eligible[i] = founded && founded->segment == where.segment &&
+                    (founded->T_world_camera.translation() - where.T_world_camera.translation())
+                            .norm() <= options_.max_place_extent &&
+                    founded->T_world_camera.linear().col(2).dot(axis) >= min_axis_cosine;
+    }
+  }
+  const int update = PlaceToUpdate(words, result, eligible);
+  Insert(words, update, place);
+  if (update < 0) founded_at_.back() = where;
   return result;
 }
 

@@ -45,6 +45,8 @@ void FabMapOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("exact_tree_corrections", &exact_tree_corrections);
   visitor.Visit("match_log_odds", &match_log_odds);
   visitor.Visit("update_near_first_view", &update_near_first_view);
+  visitor.Visit("max_place_extent", &max_place_extent);
+  visitor.Visit("max_place_turn_deg", &max_place_turn_deg);
 }
 
 void ValidateDetectorRates(double p_z_given_e, double p_z_given_not_e, const std::string& what) {
@@ -64,6 +66,10 @@ void FabMapOptions::Validate() const {
     throw std::invalid_argument("fabmap.motion_weight must lie in [0, 1]");
   if (!std::isfinite(match_log_odds))
     throw std::invalid_argument("fabmap.match_log_odds must be a finite number");
+  if (!(max_place_extent > 0))
+    throw std::invalid_argument("fabmap.max_place_extent must be > 0 (.inf: no limit)");
+  if (!(max_place_turn_deg > 0 && max_place_turn_deg <= 180))
+    throw std::invalid_argument("fabmap.max_place_turn_deg must lie in (0, 180]");
 }
 
 void LoopDetectorOptions::Visit(io::OptionVisitor& visitor) {

@@ -4,6 +4,7 @@
 // baseline. Precision-recall from sweeping the acceptance threshold, recall at 100 % precision
 // as the headline. Writes place_recognition_pr.csv, place_recognition_summary.csv and
 // place_recognition_queries.csv, and prints a table (or one JSON object).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -29,6 +30,7 @@
 #include "stereo_fabmap_slam/evaluation/pose_interpolation.h"
 #include "stereo_fabmap_slam/evaluation/trajectory.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
+#include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 #include "stereo_fabmap_slam/place_recognition/detector_model.h"
 #include "stereo_fabmap_slam/place_recognition/fab_map.h"
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
@@ -46,7 +48,7 @@ constexpr char kUsage[] =
     "                                  [--exclude-seconds S]\n"
     "       evaluate_place_recognition IMAGE_DIR --gt FILE [--exclude-frames K]\n"
     "           [--places per-image|update|both] [--every N] [--sequence L] [--vocabulary FILE]\n"
-    "           [--config FILE] [--fabmap-config FILE] [--output DIR] [--json]\n"
+    "           [--config FILE] [--fabmap-config FILE] [--output DIR] [--json] [--no-odometry]\n"
     "Each frame in turn is a query against the earlier frames' places; FAB-MAP answers with\n"
     "its best place and posterior, a plain tf-idf bag-of-words score over the same words with\n"
     "the best earlier image and its cosine. Sweeping the acceptance threshold gives\n"
@@ -65,7 +67,11 @@ constexpr char kUsage[] =
     "                     neither loop candidates nor loops; --exclude-frames K (default 5)\n"
     "                     for folders, in frames\n"
     "  --places           per-image: every image a place of its own; update: FabMap::Add\n"
-    "                     updates the best place when it matches; both (default)\n"
+    "                     updates the best place when it matches; both (default). On a\n"
+    "                     sequence, update mode runs the stereo odometry first: a view updates\n"
+    "                     only a place founded within fabmap.max_place_extent and\n"
+    "                     max_place_turn_deg of it in the same odometry segment\n"
+    "                     (--no-odometry: appearance alone, as in a folder)\n"
     "  --every N          every N-th frame only (default 1)\n"
     "  --sequence L       FAB-MAP ranks places by the summed log odds along the best chain of\n"
     "                     the last L queries over neighbouring places, as the loop detector\n"
@@ -116,13 +122,42 @@ void AddWords(const place_recognition::Vocabulary& vocabulary, const cv::Mat& de
   input->frames.word_sets.push_back(std::move(set));
 }
 
+// The stereo odometry alone (StereoSlam without loop closing) over every pair of the sequence:
+// where it put each pair's rectified left camera, and in which segment (a tracking loss starts
+// the next). Only what the running system itself knows; ground truth stays for judging.
+std::vector<place_recognition::ViewPose> OdometryPoses(
+    const datasets::EurocSequence& sequence, const camera::StereoRectifier& rectifier,
+    const tools::SlamConfiguration& options) {
+  pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier,
+                            [] { return NowSeconds() * 1e3; });
+  std::vector<place_recognition::ViewPose> poses(sequence.size());
+  int segment = 0;
+  bool lost = false;
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    const datasets::StereoImages images = sequence.LoadStereoPair(i);
+    const pipeline::FrameRecord* frame =
+        slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+    if (frame == nullptr || frame->state == odometry::TrackingState::kLost) {
+      lost = true;  // no pose: segment -1
+    } else {
+      if (lost && i > 0) ++segment;
+      lost = false;
+      poses[i].segment = segment;
+      poses[i].T_world_camera = frame->T_world_camera;
+    }
+    if ((i + 1) % 500 == 0 || i + 1 == sequence.size())
+      std::fprintf(stderr, "odometry of %zu / %zu pairs\n", i + 1, sequence.size());
+  }
+  return poses;
+}
+
 // A EuRoC-layout sequence: words of the rectified left image (what a keyframe carries), and
 // stereo points with the rectified left camera's ground-truth pose for the relevance test.
 Input ReadSequence(const std::string& directory, int every,
                    const evaluation::PlaceRelevance& relevance, double window,
                    const tools::SlamConfiguration& options,
                    const place_recognition::PlaceRecognitionOptions& place_options,
-                   const place_recognition::Vocabulary& vocabulary) {
+                   const place_recognition::Vocabulary& vocabulary, bool with_odometry) {
   const datasets::EurocSequence sequence = datasets::EurocSequence::Open(directory);
   if (sequence.size() == 0) throw std::invalid_argument(directory + ": no images");
   if (!sequence.has_ground_truth()) {
@@ -133,6 +168,9 @@ Input ReadSequence(const std::string& directory, int every,
   // Ground truth is the body's pose; the points are in the rectified left camera (T_WB T_BS).
   const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
       sequence.ground_truth(), rectifier.T_body_rectified_left());
+  const std::vector<place_recognition::ViewPose> odometry =
+      with_odometry ? OdometryPoses(sequence, rectifier, options)
+                    : std::vector<place_recognition::ViewPose>();
   features::StereoFeatureExtractor extractor(options.front_end.features, options.front_end.stereo,
                                              rectifier.camera());
   place_recognition::ImageDescriber describer(place_options.features);
@@ -168,6 +206,7 @@ Input ReadSequence(const std::string& directory, int every,
     }
     points.push_back(std::move(with_depth));
     poses.push_back(pose);
+    if (with_odometry) input.frames.odometry_poses.push_back(odometry[i]);
     input.frames.times.push_back(images.timestamp_ns * 1e-9 - start);
     input.names.push_back(fs::path(sequence.frames()[i].left_path).filename().string());
     const std::size_t done = points.size() + without_truth;
@@ -390,7 +429,7 @@ int main(int argc, char** argv) {
                  std::set<std::string>{"tau", "max-distance", "exclude-seconds", "exclude-frames",
                                        "gt", "places", "every", "vocabulary", "config",
                                        "fabmap-config", "output", "sequence"},
-                 std::set<std::string>{"mutual", "json", "help"});
+                 std::set<std::string>{"mutual", "json", "no-odometry", "help"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -453,11 +492,20 @@ int main(int argc, char** argv) {
     const place_recognition::PlaceDatabase& training = files.training_places;
 
     const std::string source = args->positional()[0];
+    // Updated places are limited by the odometry's distance and turn between views (fabmap.
+    // max_place_extent, max_place_turn_deg); an image folder has no odometry, and appearance
+    // alone decides there.
+    const bool with_odometry =
+        std::find(modes.begin(), modes.end(), evaluation::PlacesMode::kUpdate) != modes.end() &&
+        (std::isfinite(place_options.fabmap.max_place_extent) ||
+         place_options.fabmap.max_place_turn_deg < 180) &&
+        !args->Flag("no-odometry");
     const double start = NowSeconds();
     const Input input = args->Value("gt") ? ReadFolder(source, *args->Value("gt"), every,
                                                        exclude_frames, place_options, vocabulary)
                                           : ReadSequence(source, every, relevance, exclude_seconds,
-                                                         options, place_options, vocabulary);
+                                                         options, place_options, vocabulary,
+                                                         with_odometry);
     std::fprintf(stderr, "features, words and ground truth: %.1f s\n", NowSeconds() - start);
     const evaluation::ExcludedPairs excluded =
         evaluation::CountExcludedPairs(input.frames, *input.truth);

@@ -1,6 +1,6 @@
 // evaluate_place_recognition end to end (issue 10): the same rendered places seen twice, as a
 // EuRoC-layout sequence with ground-truth poses and as an image folder with a ground-truth
-// matrix, and the figure on MH01_first10s.
+// matrix, the figure on MH01_first10s, and updated places in the rendered office.
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -278,6 +278,41 @@ TEST(EvaluatePlaceRecognitionTool, RepeatedPhotographsGiveNoFalseMatchAtTheDefau
   EXPECT_GE(Value(summary, "fabmap/update", "recall_at_default"), 0.15);
   EXPECT_GE(Value(summary, "fabmap/update", "recall_at_100_precision"),
             Value(summary, "tfidf/per-image", "recall_at_100_precision"));
+}
+
+// Updated places in the office (issue 32): 90 s of the office loop (the sequence
+// loop_closing_test maps), a lap of corridors of identical doors and the first corridor again.
+// By appearance alone places swallow corridors (measured: one place holds 60 % of the frames);
+// with the odometry's poses (the default on a sequence) a place takes views within 1 m and
+// 20 deg of where it was founded, at most 2 m of path per pass, about 2 % of the route's 90 m a
+// pass: the issue's 10 % leaves room for the slow turns at corridor ends (measured 2.7 %). The
+// corridor walked twice stays many places, and smaller places rank revisits better.
+TEST(EvaluatePlaceRecognitionTool, UpdatedPlacesInTheOfficeStayNearWhereTheyWereFounded) {
+  const std::string sequence = SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, "loop", 90, 21,
+                                                       "office", /*with_bag=*/false);
+  ASSERT_FALSE(sequence.empty());
+  TemporaryDirectory temp;
+  std::map<std::string, std::map<std::string, std::map<std::string, std::string>>> summaries;
+  for (const std::string odometry : {"", " --no-odometry"}) {
+    std::string output;
+    const std::string out = temp.path() + "/out" + (odometry.empty() ? "" : "_appearance");
+    ASSERT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + sequence +
+                             " --every 4 --places update" + odometry + " --output " + out +
+                             " 2>&1",
+                         &output),
+              0)
+        << output;
+    summaries[odometry] = ReadSummary(out + "/place_recognition_summary.csv");
+    RecordProperty("summary" + odometry, ReadTextFile(out + "/place_recognition_summary.csv"));
+  }
+  const auto& with_odometry = summaries[""];
+  const auto& appearance = summaries[" --no-odometry"];
+  EXPECT_GT(Value(with_odometry, "fabmap/update", "queries_with_true_match"), 40);
+  EXPECT_LE(Value(with_odometry, "fabmap/update", "largest_place_share"), 0.10);
+  EXPECT_LT(Value(with_odometry, "fabmap/update", "largest_place_share"),
+            Value(appearance, "fabmap/update", "largest_place_share"));
+  EXPECT_GE(Value(with_odometry, "fabmap/update", "recall_at_100_precision"),
+            Value(appearance, "fabmap/update", "recall_at_100_precision"));
 }
 
 TEST(EvaluatePlaceRecognitionTool, InputWithoutImagesIsAnError) {

@@ -1,12 +1,14 @@
 // Loop closing and relocalization in the offline runner, as a user runs them: rendered routes
-// (make_synthetic_sequence, exact ground truth) through run_dataset with the default
-// vocabulary. On a route that returns to its start the revisit must be found, every accepted
-// loop must join views that are really close, and closing must remove most of the drift; on the
-// kidnap route the camera must be found again at once and the trajectory stay one piece.
+// (make_synthetic_sequence, exact ground truth; the hall and the office) through run_dataset
+// with the default vocabulary. On a route that returns to its start the revisit must be found,
+// every accepted loop must join views that are really close, and closing must remove most of
+// the drift; on the kidnap route the camera must be found again at once and the trajectory stay
+// one piece.
 #include <cmath>
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -35,9 +37,9 @@ Eigen::Vector3d PositionAt(const io::Trajectory& truth, double time) {
 // summary.json (empty, and the test fails, if a program failed).
 std::pair<std::string, std::string> MapRenderedRoute(const TemporaryDirectory& temp,
                                                      const std::string& route, int seconds,
-                                                     int seed) {
-  const std::string sequence =
-      SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, route, seconds, seed);
+                                                     int seed, const std::string& scene = "hall") {
+  const std::string sequence = SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, route, seconds,
+                                                       seed, scene, scene == "hall");
   std::string output;
   if (sequence.empty() || RunCommand(std::string(RUN_DATASET_BIN) + " " + sequence +
                                          " --quiet --output " + temp.path() + "/run 2>&1",
@@ -46,6 +48,37 @@ std::pair<std::string, std::string> MapRenderedRoute(const TemporaryDirectory& t
     return {sequence, ""};
   }
   return {sequence, ReadTextFile(temp.path() + "/run/summary.json")};
+}
+
+// The loops run_dataset accepted (run/loops.csv), with how far apart the two keyframes'
+// cameras were in ground truth (body frame: the rig is rigid, so camera and body distances
+// differ by nothing here).
+struct AcceptedLoop {
+  std::string query_keyframe, match_keyframe;
+  double query_time = 0, match_time = 0;  // [s] from the sequence's start
+  double distance = 0;                    // [m]
+};
+std::vector<AcceptedLoop> AcceptedLoops(const std::string& sequence, const std::string& run) {
+  const io::Trajectory truth =
+      io::ReadEurocTrajectory(sequence + "/mav0/state_groundtruth_estimate0/data.csv");
+  const std::string loops = run + "/loops.csv";
+  EXPECT_EQ(ReadTextFile(loops).rfind("query_keyframe,query_time,match_keyframe,match_time,"
+                                      "probability,inliers,accepted,reason\n",
+                                      0),
+            0u);
+  std::vector<AcceptedLoop> accepted;
+  for (const io::TextRow& row : io::ReadDelimitedText(loops, io::Separator::kComma)) {
+    if (row.line_number == 1 || row.fields.size() < 8 || row.fields[6] != "1") continue;
+    AcceptedLoop loop;
+    loop.query_keyframe = row.fields[0];
+    loop.match_keyframe = row.fields[2];
+    const double query_time = std::stod(row.fields[1]), match_time = std::stod(row.fields[3]);
+    loop.distance = (PositionAt(truth, query_time) - PositionAt(truth, match_time)).norm();
+    loop.query_time = query_time - truth.front().timestamp;
+    loop.match_time = match_time - truth.front().timestamp;
+    accepted.push_back(loop);
+  }
+  return accepted;
 }
 
 TEST(LoopClosing, RenderedLoopIsClosedWithoutFalseLoops) {
@@ -60,26 +93,41 @@ TEST(LoopClosing, RenderedLoopIsClosedWithoutFalseLoops) {
   EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.5 * JsonNumber(summary, "ate_rmse_odometry"));
   EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.02);
 
-  // Every accepted loop joins keyframes that were less than 1 m apart (ground truth, body
-  // frame: the rig is rigid, so camera and body distances differ by nothing here).
-  const io::Trajectory truth =
-      io::ReadEurocTrajectory(sequence + "/mav0/state_groundtruth_estimate0/data.csv");
-  int accepted = 0, after_revisit = 0;
-  const std::string loops = temp.path() + "/run/loops.csv";
-  EXPECT_EQ(ReadTextFile(loops).rfind("query_keyframe,query_time,match_keyframe,match_time,"
-                                      "probability,inliers,accepted,reason\n",
-                                      0),
-            0u);
-  for (const io::TextRow& row : io::ReadDelimitedText(loops, io::Separator::kComma)) {
-    if (row.line_number == 1 || row.fields.size() < 8 || row.fields[6] != "1") continue;
-    ++accepted;
-    const double query_time = std::stod(row.fields[1]), match_time = std::stod(row.fields[3]);
-    const double distance = (PositionAt(truth, query_time) - PositionAt(truth, match_time)).norm();
-    EXPECT_LT(distance, 1.0) << "loop " << row.fields[0] << " -> " << row.fields[2];
-    after_revisit += query_time - truth.front().timestamp > 24.0 ? 1 : 0;
+  // Every accepted loop joins keyframes that were less than 1 m apart.
+  const std::vector<AcceptedLoop> loops = AcceptedLoops(sequence, temp.path() + "/run");
+  int after_revisit = 0;
+  for (const AcceptedLoop& loop : loops) {
+    EXPECT_LT(loop.distance, 1.0) << "loop " << loop.query_keyframe << " -> "
+                                  << loop.match_keyframe;
+    after_revisit += loop.query_time > 24.0 ? 1 : 0;
   }
-  EXPECT_EQ(accepted, JsonNumber(summary, "loops_accepted"));
+  EXPECT_EQ(static_cast<double>(loops.size()), JsonNumber(summary, "loops_accepted"));
   EXPECT_GT(after_revisit, 0);
+}
+
+// The office floor (issue 32): corridors of plain walls and identical doors, posters and signs
+// hung on several walls. 90 s of its loop: one lap of the outer corridors (80 s), then 10 s
+// back along the first corridor. The revisit must be found, and no loop may join look-alike
+// doors or posters of different corridors (keyframes > 1 m apart in ground truth: a true
+// revisit passes within 0.15 m of an old keyframe, and corridors lie metres apart). The bound
+// on the trajectory is the issue's target: half the odometry's error (measured on 95 s of this
+// seed: 47 loops from 80.6 s on, none far, 7.85 cm against 30.6 cm; on the 170 s seed-11 route
+// of docs/place_recognition.md 32 %).
+TEST(LoopClosing, OfficeLoopIsClosedWithoutLoopsBetweenLookAlikeCorridors) {
+  TemporaryDirectory temp;
+  const auto [sequence, summary] = MapRenderedRoute(temp, "loop", 90, 21, "office");
+  ASSERT_FALSE(summary.empty());
+  RecordProperty("summary", summary);
+  const std::vector<AcceptedLoop> loops = AcceptedLoops(sequence, temp.path() + "/run");
+  int after_lap = 0;
+  for (const AcceptedLoop& loop : loops) {
+    EXPECT_LT(loop.distance, 1.0) << "loop " << loop.query_keyframe << " (" << loop.query_time
+                                  << " s) -> " << loop.match_keyframe << " (" << loop.match_time
+                                  << " s)";
+    after_lap += loop.query_time > 80.0 && loop.match_time < 10.0 ? 1 : 0;
+  }
+  EXPECT_GE(after_lap, 1);
+  EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.5 * JsonNumber(summary, "ate_rmse_odometry"));
 }
 
 TEST(Relocalization, KidnappedCameraIsFoundAgainAndTheTrajectoryStaysOnePiece) {

@@ -111,9 +111,12 @@ std::string ProgramFingerprint(const std::string& program) {
 }  // namespace
 
 std::string SharedSyntheticSequence(const std::string& make_synthetic_sequence,
-                                    const std::string& route, int seconds, int seed) {
+                                    const std::string& route, int seconds, int seed,
+                                    const std::string& scene, bool with_bag) {
   const std::string cache = STEREO_FABMAP_SLAM_TEST_CACHE;
-  const std::string name = route + "-" + std::to_string(seconds) + "s-seed" + std::to_string(seed);
+  const std::string name = (scene == "hall" ? "" : scene + "-") + route + "-" +
+                           std::to_string(seconds) + "s-seed" + std::to_string(seed) +
+                           (with_bag ? "" : "-no-bag");
   const std::string folder = cache + "/" + name;
   // Written last: a folder without it (a render that was interrupted) is rendered again.
   const std::string fingerprint_file = folder + "/rendered_by";
@@ -127,7 +130,7 @@ std::string SharedSyntheticSequence(const std::string& make_synthetic_sequence,
   std::string output;
   if (RunCommand(make_synthetic_sequence + " --output " + folder + " --route " + route +
                      " --seconds " + std::to_string(seconds) + " --seed " + std::to_string(seed) +
-                     " 2>&1",
+                     " --scene " + scene + (with_bag ? "" : " --no-bag") + " 2>&1",
                  &output) != 0) {
     ADD_FAILURE() << output;
     return "";

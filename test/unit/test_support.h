@@ -36,9 +36,11 @@ int RunCommand(const std::string& command, std::string* output);
 // that need one, so tests that ask for the same sequence share it: it is kept in the build
 // folder (STEREO_FABMAP_SLAM_TEST_CACHE), rendered by the first test that asks (the others wait
 // on a file lock), and rendered again when the program has been rebuilt since. Tests must only
-// read it. Fails the calling test and returns "" if rendering fails.
+// read it. Fails the calling test and returns "" if rendering fails. `scene`: "hall" or
+// "office"; with_bag false renders the images alone (for run_dataset; no rostest plays it).
 std::string SharedSyntheticSequence(const std::string& make_synthetic_sequence,
-                                    const std::string& route, int seconds, int seed);
+                                    const std::string& route, int seconds, int seed,
+                                    const std::string& scene = "hall", bool with_bag = true);
 
 // The number after "key": in a one-line JSON object (run_dataset's summary.json); records a test
 // failure and returns -1 if the key is missing.

@@ -15,7 +15,9 @@ struct PlaceQueryResult {
   double score = 0;  // FAB-MAP log odds of best_place (FabMapResult), or its tf-idf cosine
   double new_place_probability = std::numeric_limits<double>::quiet_NaN();  // FAB-MAP only
   // FAB-MAP over the whole map, recent frames included: no place reached the match threshold,
-  // so FabMap::Add would make the view a new place. False for methods without the notion.
+  // so by appearance the view shows a new place (FabMap::Add then founds one; with odometry
+  // poses it also founds one when only a place far away matched). False for methods without
+  // the notion.
   bool declared_new = false;
   bool is_true = false;  // ground truth: the query shows the same place as best_frame
   // Where the first true answer stands in the method's ranking of the candidates (0 = best):

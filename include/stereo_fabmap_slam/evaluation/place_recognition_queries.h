@@ -20,6 +20,10 @@ struct PlaceRecognitionFrames {
   // Earlier frames no more than `window` before a query (same unit as times) are its recent
   // past, which odometry connects anyway: neither loop candidates nor true loops.
   double window = 0;
+  // Per frame, where the odometry put its camera, or empty: no odometry (an image folder).
+  // Updated places then spread no farther than fabmap.max_place_extent and
+  // max_place_turn_deg from where they were founded (FabMap::Add with a pose).
+  std::vector<place_recognition::ViewPose> odometry_poses;
 
   int size() const { return static_cast<int>(times.size()); }
   bool IsCandidate(int earlier, int query) const {
@@ -29,7 +33,8 @@ struct PlaceRecognitionFrames {
 
 // FAB-MAP's places: one per image (every image becomes a place of its own, as the SLAM map keeps
 // one per keyframe), or updated on revisits (FabMap::Add: the best place takes the view when
-// its log odds reach match_log_odds, otherwise the view becomes a new place).
+// its log odds reach match_log_odds, otherwise the view becomes a new place; with the frames'
+// odometry poses, only a place founded near the view may take it).
 enum class PlacesMode { kPerImage, kUpdate };
 const char* PlacesModeName(PlacesMode mode);  // "per-image", "update"
 
@@ -81,8 +86,8 @@ PlaceMapShape DescribePlaces(const PlaceRecognitionFrames& frames, const PlaceGr
 // past): the best of them, its posterior and the new-place probability. A place is the query's true
 // match when ground truth links the query to one of the place's frames outside the window;
 // best_frame is that frame, or the place's latest frame outside the window if none is.
-// declared_new comes from the comparison with the whole map, recent frames included, as Add
-// decides. `fabmap` must be empty; it holds the places afterwards. Throws std::invalid_argument
+// declared_new comes from the comparison with the whole map, recent frames included: Add's
+// decision by appearance. `fabmap` must be empty; it holds the places afterwards. Throws std::invalid_argument
 // if the frames and the ground truth differ in size.
 FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& truth,
                                const FabMapQueryOptions& options, place_recognition::FabMap* fabmap,

@@ -3,8 +3,11 @@
 #include <array>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/io/option_reader.h"
 #include "stereo_fabmap_slam/place_recognition/chow_liu_tree.h"
@@ -69,6 +72,13 @@ struct FabMapResult {
   }
 };
 
+// Where the odometry put a view's camera, for Add()'s place extent. Poses compare only within
+// one odometry segment: after a tracking loss the odometry starts a frame unrelated to the last.
+struct ViewPose {
+  int segment = -1;  // -1: the odometry had no pose for the view (tracking lost)
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+};
+
 // FAB-MAP: the posterior over the places in the map and a new place, given the words of a view.
 // FAB-MAP 2.0 (the default) computes the same log-likelihoods as FAB-MAP 1.0 by rearranging the
 // sum over words: a per-place constant plus corrections for the words the query shows (and their
@@ -89,8 +99,14 @@ class FabMap {
   // recent past; relocalization leaves out the piece of map it is lost in.
   FabMapResult Compare(const std::vector<int>& words, const std::vector<char>& candidates) const;
   // Compare, then update the best place if its log odds reach match_log_odds, or add a new
-  // place; `place` receives which.
+  // place; `place` receives which. Appearance alone decides (image folders without odometry).
   FabMapResult Add(const std::vector<int>& words, int* place = nullptr);
+  // The same with the view's odometry pose: only places founded in the same segment within
+  // options.max_place_extent of it, looking no more than options.max_place_turn_deg away, may
+  // take the view (the likeliest of those, if its log odds reach match_log_odds); a view
+  // without a pose founds a place no view will update. The result is Compare's over the whole
+  // map, whichever place took the view.
+  FabMapResult Add(const std::vector<int>& words, const ViewPose& where, int* place = nullptr);
 
   // Adds the words as a new place, never merged with an existing one (the SLAM map keeps one
   // place per keyframe); returns its index.
@@ -121,11 +137,21 @@ class FabMap {
   std::vector<double> LogLikelihoodsIndexed(const IndexedPlaces& places, const Query& query) const;
   double NewPlaceLogLikelihood(const Query& query) const;
   double FirstViewLogLikelihood(int place, const Query& query) const;
+  // The place that takes the view: the best place if `eligible` (one flag per place) lets it,
+  // else the likeliest eligible place, provided its log odds reach match_log_odds (and it
+  // matches its first view, if so configured); -1: the view founds a new place.
+  int PlaceToUpdate(const std::vector<int>& words, const FabMapResult& result,
+                    const std::vector<char>& eligible) const;
+  // Updates place `update` with the view, or adds it as a new place (update < 0).
+  void Insert(const std::vector<int>& words, int update, int* place);
 
   FabMapOptions options_;
   FabMapModel model_;
   IndexedPlaces places_, samples_;
   std::vector<std::vector<int>> first_views_;  // per place: the words it was founded with
+  // Per place: where its first view was taken from; nullopt for a place founded by Add without a
+  // position (or loaded), which only Add without a position updates.
+  std::vector<std::optional<ViewPose>> founded_at_;
   int last_match_ = -1;
 };
 

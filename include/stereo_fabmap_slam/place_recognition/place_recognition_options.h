@@ -66,6 +66,21 @@ struct FabMapOptions {
   // alone. A place then stays around where it was first seen, instead of growing along a chain
   // of similar views down a corridor into one place for the whole corridor.
   bool update_near_first_view = false;
+  // Add() with the odometry's position of the view: a view updates only a place founded in the
+  // same odometry segment at most this far from it. Appearance alone lets a place grow down a
+  // corridor of identical doors and across look-alike corridors, views metres apart that no
+  // word tells apart; the odometry does. 1 m: views from within a metre share most of what
+  // they see at indoor depths (2-5 m), so a place stays one location (the loop detector's
+  // max_loop_distance, 0.8 m, is the same notion); and stereo odometry drifts about 1 % of the
+  // path, 0.5 m over a 50 m lap, so a revisit after a lap of a room or a floor still updates
+  // the place it saw. Not a speed or frame-rate figure: the place spans at most 2 m of path per
+  // pass, whatever the camera does. inf: no limit.
+  double max_place_extent = 1.0;  // [m]
+  // ...and whose optical axis is within this angle of the place's first view's. A camera that
+  // turns on the spot sees another scene: 20 deg keeps three quarters of a 80 deg wide view
+  // (EuRoC's), so a place spans at most a 40 deg fan, short of the half image (tau 0.5) that
+  // makes two views one place in the ground truth. 180: no limit.
+  double max_place_turn_deg = 20;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
