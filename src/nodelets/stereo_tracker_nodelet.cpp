@@ -76,7 +76,7 @@ void StereoTrackerNodelet::onInit() {
   NODELET_INFO_STREAM("options in force:\n" << p.printed);
   for (const std::string& warning : p.warnings) NODELET_WARN("%s", warning.c_str());
   stage_ = std::make_unique<pipeline::TrackingStage>(
-      p.options, p.monitor, p.relocalizer.attempt_every_n_frames, ros_wiring::SteadyMilliseconds);
+      p.options, p.monitor, p.relocalizer, ros_wiring::SteadyMilliseconds);
   pairs_.Configure(p.options.tracker.queued_pairs, p.options.tracker.catch_up_gap,
                    &stage_->input());
   outputs_ = std::make_unique<ros_wiring::TrackerOutputs>(node, p.frames, p.publish_tf);

@@ -98,11 +98,18 @@ RelocalizationAnswer PlaceStage::Relocalize(const RelocalizationRequest& request
     answer.result.reason = "the frame's segment is in the map already";
     return answer;
   }
-  answer.result =
-      relocalizer_.Relocalize(request.features, detector_.Words(request.place_descriptors),
-                              detector_, [&](const map::StoredKeyframe& keyframe) {
-                                return !in_map_only || map.InMap(keyframe.keyframe.id);
-                              });
+  // Recovery: ranked by the chain of the frame's segment so far, as its loops are.
+  const map::KeyframeDatabase& database = detector_.database();
+  const std::int64_t segment =
+      in_map_only && request.reference_keyframe >= 0 && database.Contains(request.reference_keyframe)
+          ? database.Get(request.reference_keyframe).segment
+          : -1;
+  answer.result = relocalizer_.Relocalize(
+      request.features, detector_.Words(request.place_descriptors), detector_,
+      [&](const map::StoredKeyframe& keyframe) {
+        return !in_map_only || map.InMap(keyframe.keyframe.id);
+      },
+      segment);
   const relocalization::Relocalization& found = answer.result;
   if (found.success()) {
     // A keyframe too new for the map's last word (the nodelets' map_graph follows the bundle
@@ -113,7 +120,15 @@ RelocalizationAnswer PlaceStage::Relocalize(const RelocalizationRequest& request
             ? map.MapPose(found.keyframe_id)
             : map.MapToOdom() * detector_.database().Get(found.keyframe_id).keyframe.T_world_camera;
     answer.T_map_camera = T_map_keyframe * found.T_keyframe_camera;
-    if (request.add_edge && request.reference_keyframe >= 0 &&
+    if (request.expected_T_map_camera) {
+      const Eigen::Isometry3d difference =
+          request.expected_T_map_camera->inverse() * answer.T_map_camera;
+      const relocalization::RelocalizerOptions& options = relocalizer_.options();
+      answer.agrees = difference.translation().norm() <= options.confirm_translation &&
+                      Eigen::AngleAxisd(difference.linear()).angle() <=
+                          options.confirm_rotation_deg * M_PI / 180.0;
+    }
+    if (request.add_edge && answer.agrees.value_or(true) && request.reference_keyframe >= 0 &&
         request.reference_keyframe != found.keyframe_id) {
       map::LoopEdge edge;
       edge.match_id = found.keyframe_id;

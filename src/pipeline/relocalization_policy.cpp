@@ -12,9 +12,11 @@ std::string FoundText(const relocalization::Relocalization& found) {
 
 }  // namespace
 
-RelocalizationPolicy::RelocalizationPolicy(int attempt_every_n_frames)
-    : every_(attempt_every_n_frames) {
+RelocalizationPolicy::RelocalizationPolicy(const relocalization::RelocalizerOptions& options)
+    : every_(options.attempt_every_n_frames), confirm_distance_(options.confirm_distance) {
   if (every_ < 1) throw std::invalid_argument("relocalization: attempt every n >= 1 frames");
+  if (!(confirm_distance_ >= 0))
+    throw std::invalid_argument("relocalization: confirm_distance must be >= 0");
 }
 
 void RelocalizationPolicy::SetMode(SlamMode mode, bool map_has_keyframes) {
@@ -27,6 +29,7 @@ void RelocalizationPolicy::SetMode(SlamMode mode, bool map_has_keyframes) {
   mode_ = mode;
   localized_ = false;
   frames_since_attempt_ = 0;
+  candidate_.reset();
 }
 
 void RelocalizationPolicy::OnMapLoaded() {
@@ -35,12 +38,14 @@ void RelocalizationPolicy::OnMapLoaded() {
   break_reason_ = "loading a map";
   localized_ = false;
   frames_since_attempt_ = 0;
+  candidate_.reset();
 }
 
 void RelocalizationPolicy::RequestFromUser(bool reanchor) { user_request_ = UserRequest{reanchor}; }
 
 RelocalizationPolicy::Decision RelocalizationPolicy::Decide(const odometry::TrackingResult& result,
-                                                            bool map_has_keyframes) {
+                                                            bool map_has_keyframes,
+                                                            bool reference_in_map) {
   Decision decision;
   // A new segment (after a loss, or a reset) is not in the map until a relocalization (or a
   // loop) joins it. A lost frame whose map the tracker kept has no pose, but the odometry goes on
@@ -53,16 +58,28 @@ RelocalizationPolicy::Decision RelocalizationPolicy::Decide(const odometry::Trac
   } else if (broken && map_has_keyframes) {
     if (!recovering_) frames_since_attempt_ = 0;
     recovering_ = true;
+    candidate_.reset();  // its map -> odom was for the odometry before the break
+  } else if (recovering_ && reference_in_map && result.state != odometry::TrackingState::kLost) {
+    // A loop joined the segment meanwhile (the place stage would answer "joined already").
+    recovering_ = false;
+    candidate_.reset();
+    break_reason_ = "tracking loss";
   }
   // A lost frame without a new keyframe has only the motion model's guess: nothing to find.
   has_pose_ = result.state != odometry::TrackingState::kLost || result.keyframe.has_value();
   reference_keyframe_ = result.reference_keyframe;
   T_odom_camera_ = result.T_world_camera;
+  // A candidate is confirmed only from a view elsewhere (RelocalizerOptions::confirm_distance).
+  const bool far_from_candidate =
+      !candidate_ ||
+      (result.T_world_camera.translation() - candidate_->odom_position).norm() >= confirm_distance_;
   bool due = false;
   if (has_pose_) {  // every n-th frame with a pose
     if (mode_ == SlamMode::kLocalization) {
       due = map_has_keyframes &&
             (localized_ ? result.keyframe.has_value() : frames_since_attempt_++ % every_ == 0);
+    } else if (recovering_ && !far_from_candidate) {
+      due = false;
     } else {
       due = recovering_ && frames_since_attempt_++ % every_ == 0;
     }
@@ -85,8 +102,13 @@ RelocalizationPolicy::Decision RelocalizationPolicy::Decide(const odometry::Trac
   // Mapping: after a loss the edge is what joins the odometry to the map; while tracking is
   // fine it corrects map -> odom only when the user asks to re-anchor. Localization never
   // changes the map: the result moves map -> odom instead.
+  // A recovery's first success is only a candidate: no edge until one from elsewhere agrees.
+  // (A user's check from near the candidate is answered without an edge.)
+  const bool confirming = recover && candidate_.has_value() && far_from_candidate;
   decision.add_edge =
-      mode_ == SlamMode::kMapping && (recover || (from_user && user_request_->reanchor));
+      mode_ == SlamMode::kMapping &&
+      ((recover && (confirm_distance_ == 0 || confirming)) || (from_user && user_request_->reanchor));
+  if (confirming) decision.expected_T_map_camera = candidate_->T_map_odom * result.T_world_camera;
   return decision;
 }
 
@@ -103,12 +125,33 @@ RelocalizationOutcome RelocalizationPolicy::OnAnswer(const RelocalizationRequest
       frames_since_attempt_ = 0;
     }
   } else if (recovering_ && (found.success() || answer.already_joined)) {
-    recovering_ = false;
-    if (found.success()) {
-      outcome.news = "found in the map again after " + break_reason_ + " against " +
-                     FoundText(found) + "; its segment is joined to the map";
+    // Joined: by a loop meanwhile, by this answer's edge (a confirmation, or the user's
+    // re-anchoring), or by a success that needs no confirmation or agrees with the candidate.
+    const bool joined = answer.already_joined || answer.edge.has_value() ||
+                        confirm_distance_ == 0 || answer.agrees.value_or(false);
+    if (joined) {
+      recovering_ = false;
+      if (found.success()) {
+        outcome.news = "found in the map again after " + break_reason_ + " against " +
+                       FoundText(found) +
+                       (candidate_ ? ", as the candidate against keyframe " +
+                                         std::to_string(candidate_->keyframe_id) + " had it"
+                                   : std::string()) +
+                       "; its segment is joined to the map";
+      }
+      break_reason_ = "tracking loss";
+      candidate_.reset();
+    } else if (answer.map_pose_known && (!candidate_ || request.expected_T_map_camera)) {
+      // The first candidate, or a view from elsewhere that disagrees with it: the newer view is
+      // the candidate. (A user's check from near the candidate leaves it as it is.)
+      if (candidate_) {
+        outcome.news = "relocalized against " + FoundText(found) +
+                       ", which disagrees with the candidate against keyframe " +
+                       std::to_string(candidate_->keyframe_id) + ": the new candidate";
+      }
+      candidate_ = Candidate{answer.T_map_camera * request.T_odom_camera.inverse(),
+                             request.T_odom_camera.translation(), found.keyframe_id};
     }
-    break_reason_ = "tracking loss";
   }
   if (request.from_user) {
     UserRelocalization user;

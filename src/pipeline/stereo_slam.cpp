@@ -20,7 +20,7 @@ StereoSlam::StereoSlam(const FrontEndOptions& front_end_options,
                        const camera::StereoRectifier& rectifier, Clock clock)
     : clock_(clock),
       tracking_(front_end_options, rectifier, MonitorOptions(front_end_options),
-                relocalization::RelocalizerOptions().attempt_every_n_frames, clock),
+                relocalization::RelocalizerOptions(), clock),
       mapping_(bundle_adjustment_options, backend::PoseGraphOptions(), clock),
       bundle_adjustment_options_(bundle_adjustment_options) {}
 
@@ -32,7 +32,7 @@ void StereoSlam::EnableLoopClosing(place_recognition::LoopDetector detector,
   }
   mapping_ = MappingStage(bundle_adjustment_options_, pose_graph_options, clock_);
   place_.emplace(PlaceStage(std::move(detector), relocalizer_options, clock_), tracking_.camera());
-  tracking_.SetAttemptEveryNFrames(relocalizer_options.attempt_every_n_frames);
+  tracking_.SetRelocalizationOptions(relocalizer_options);
 }
 
 void StereoSlam::SetMode(SlamMode mode) {

@@ -6,15 +6,15 @@ namespace stereo_fabmap_slam::pipeline {
 
 TrackingStage::TrackingStage(const FrontEndOptions& options,
                              const camera::StereoRectifier& rectifier,
-                             const InputMonitorOptions& input, int attempt_every_n_frames,
-                             Clock clock)
-    : TrackingStage(options, input, attempt_every_n_frames, std::move(clock)) {
+                             const InputMonitorOptions& input,
+                             const relocalization::RelocalizerOptions& relocalization, Clock clock)
+    : TrackingStage(options, input, relocalization, std::move(clock)) {
   Calibrate(rectifier);
 }
 
 TrackingStage::TrackingStage(const FrontEndOptions& options, const InputMonitorOptions& input,
-                             int attempt_every_n_frames, Clock clock)
-    : options_(options), input_(input), policy_(attempt_every_n_frames), clock_(std::move(clock)) {}
+                             const relocalization::RelocalizerOptions& relocalization, Clock clock)
+    : options_(options), input_(input), policy_(relocalization), clock_(std::move(clock)) {}
 
 void TrackingStage::Calibrate(const camera::StereoRectifier& rectifier,
                               const Eigen::Isometry3d& T_odom_camera) {
@@ -55,7 +55,9 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   if (!map_followed_) return output;
 
   const odometry::TrackingResult& result = output.tracking;
-  const RelocalizationPolicy::Decision decision = policy_.Decide(result, !map->empty());
+  const RelocalizationPolicy::Decision decision = policy_.Decide(
+      result, !map->empty(),
+      result.reference_keyframe >= 0 && map->InMap(result.reference_keyframe));
   if (!decision.failure.empty()) {
     output.relocalization_failure = decision.failure;
     if (decision.from_user) output.user = policy_.FailUserRequest(decision.failure);
@@ -73,6 +75,7 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   request.T_reference_camera = result.T_keyframe_camera;
   request.T_odom_camera = result.T_world_camera;
   request.add_edge = decision.add_edge;
+  request.expected_T_map_camera = decision.expected_T_map_camera;
   request.from_user = decision.from_user;
   output.relocalization = std::move(request);
   return output;
@@ -98,7 +101,19 @@ FrameRecord TrackingStage::RecordFrame(const TrackingOutput& output, double time
   record.is_keyframe = result.keyframe.has_value();
   record.inliers = result.inliers;
   record.note = result.reason;
-  if (answer != nullptr) RecordRelocalization(*answer, &record);
+  if (answer != nullptr) {
+    RecordRelocalization(*answer, &record);
+    if (answer->result.success() && policy_.mode() == SlamMode::kMapping &&
+        policy_.recovering()) {
+      // A recovery's success that left the segment off the map: a candidate for a second view
+      // from elsewhere to confirm (RelocalizationPolicy), not yet a relocalization.
+      record.relocalized = false;
+      *record.relocalization += answer->agrees ? "; disagrees with the candidate, replaces it"
+                                               : "; a candidate, to be confirmed";
+    } else if (answer->agrees.value_or(false)) {
+      *record.relocalization += "; agrees with the candidate";
+    }
+  }
   // Without a map to be on (no loop closing) every frame counts as on it: the map is the odometry.
   if (map_followed_) {
     record.on_map = policy_.on_map();

@@ -155,6 +155,35 @@ PlaceQuery LoopDetector::Candidates(const std::vector<int>& words,
       max_candidates);
 }
 
+FabMapResult LoopDetector::CompareAllowed(const std::vector<int>& words,
+                                          const std::vector<char>& mask,
+                                          std::vector<double>* log_odds) const {
+  log_odds->assign(mask.size(), -std::numeric_limits<double>::infinity());
+  FabMapResult result;
+  result.posterior.assign(mask.size(), 0.0);
+  if (std::count(mask.begin(), mask.end(), 1) == 0 || words.empty()) return result;
+  result = fabmap_.Compare(words, mask);
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    if (mask[i]) (*log_odds)[i] = result.CandidateLogOdds(static_cast<int>(i));
+  }
+  return result;
+}
+
+PlaceQuery LoopDetector::SequenceCandidates(
+    const std::vector<int>& words, const std::function<bool(const map::StoredKeyframe&)>& allowed,
+    std::int64_t segment, int max_candidates) const {
+  const bool chained =
+      options_.sequence_length > 1 && segment >= 0 && segment == sequence_segment_;
+  if (!chained) return Candidates(words, allowed, max_candidates, 0.0);
+  const std::vector<char> mask = AllowedPlaces(allowed);
+  std::vector<double> log_odds;
+  const FabMapResult result = CompareAllowed(words, mask, &log_odds);
+  const std::vector<double> scores = sequence_.Peek(log_odds);
+  return Ranked(
+      result, mask, scores, [&](std::size_t i) { return std::isfinite(scores[i]); },
+      max_candidates);
+}
+
 LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
   const double query_time = query.keyframe.timestamp;
   LoopDetection detection;
@@ -175,15 +204,8 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
                         options_.min_log_odds);
   } else {
     const std::vector<char> mask = AllowedPlaces(old_enough);
-    std::vector<double> log_odds(mask.size(), -std::numeric_limits<double>::infinity());
-    FabMapResult result;
-    result.posterior.assign(mask.size(), 0.0);
-    if (std::count(mask.begin(), mask.end(), 1) > 0 && !query.words.empty()) {
-      result = fabmap_.Compare(query.words, mask);
-      for (std::size_t i = 0; i < mask.size(); ++i) {
-        if (mask[i]) log_odds[i] = result.CandidateLogOdds(static_cast<int>(i));
-      }
-    }
+    std::vector<double> log_odds;
+    const FabMapResult result = CompareAllowed(query.words, mask, &log_odds);
     if (query.segment != sequence_segment_) sequence_.Reset();
     sequence_segment_ = query.segment;
     sequence_last_id_ = query.keyframe.id;

@@ -25,6 +25,18 @@ SequenceScore::SequenceScore(SequenceScoreOptions options) : options_(options) {
 std::vector<double> SequenceScore::Push(const std::vector<double>& log_odds) {
   history_.push_back(log_odds);
   while (static_cast<int>(history_.size()) > options_.length) history_.pop_front();
+  return Score(history_);
+}
+
+std::vector<double> SequenceScore::Peek(const std::vector<double>& log_odds) const {
+  std::deque<std::vector<double>> history(history_);
+  history.push_back(log_odds);
+  while (static_cast<int>(history.size()) > options_.length) history.pop_front();
+  return Score(history);
+}
+
+std::vector<double> SequenceScore::Score(const std::deque<std::vector<double>>& history) const {
+  const std::vector<double>& log_odds = history.back();
   // What a query adds to a chain at a place: its log odds there, or nothing if it had none.
   const auto evidence = [](const std::vector<double>& query, long place) {
     if (place < 0 || place >= static_cast<long>(query.size())) return 0.0;
@@ -36,7 +48,7 @@ std::vector<double> SequenceScore::Push(const std::vector<double>& log_odds) {
   std::vector<double> best(static_cast<std::size_t>(places), 0.0);
   std::vector<double> next(best.size());
   const long step = options_.max_step;
-  for (std::size_t k = 0; k < history_.size(); ++k) {
+  for (std::size_t k = 0; k < history.size(); ++k) {
     for (long p = 0; p < places; ++p) {
       // A chain may start at any query: the earlier views may have shown new places, whose log
       // odds against a new place are 0 (Smith-Waterman's local alignment). So a revisit that
@@ -48,7 +60,7 @@ std::vector<double> SequenceScore::Push(const std::vector<double>& log_odds) {
           previous = std::max(previous, best[static_cast<std::size_t>(q)]);
         }
       }
-      next[static_cast<std::size_t>(p)] = previous + evidence(history_[k], p);
+      next[static_cast<std::size_t>(p)] = previous + evidence(history[k], p);
     }
     best.swap(next);
   }

@@ -16,6 +16,9 @@ void RelocalizerOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_inliers", &min_inliers);
   visitor.Visit("min_inlier_cells", &min_inlier_cells);
   visitor.Visit("attempt_every_n_frames", &attempt_every_n_frames);
+  visitor.Visit("confirm_distance", &confirm_distance);
+  visitor.Visit("confirm_translation", &confirm_translation);
+  visitor.Visit("confirm_rotation_deg", &confirm_rotation_deg);
   visitor.Visit("translation_sigma", &translation_sigma);
   visitor.Visit("rotation_sigma_deg", &rotation_sigma_deg);
 }
@@ -38,6 +41,11 @@ void RelocalizerOptions::Validate() const {
   }
   if (attempt_every_n_frames < 1) {
     throw std::invalid_argument("relocalization.attempt_every_n_frames must be >= 1");
+  }
+  if (!(confirm_distance >= 0) || !(confirm_translation > 0) || !(confirm_rotation_deg > 0)) {
+    throw std::invalid_argument(
+        "relocalization: need confirm_distance >= 0, confirm_translation and "
+        "confirm_rotation_deg > 0");
   }
   if (!(translation_sigma > 0) || !(rotation_sigma_deg > 0)) {
     throw std::invalid_argument("relocalization sigmas must be > 0");

@@ -69,7 +69,8 @@ Relocalizer::Relocalizer(const RelocalizerOptions& options, const geometry::Ster
 Relocalization Relocalizer::Relocalize(const features::StereoFeatures& frame,
                                        const std::vector<int>& words,
                                        const place_recognition::LoopDetector& map,
-                                       const KeyframeFilter& allowed) const {
+                                       const KeyframeFilter& allowed,
+                                       std::int64_t segment) const {
   Relocalization best;
   if (map.database().empty()) {
     best.status = RelocalizationStatus::kEmptyMap;
@@ -80,8 +81,12 @@ Relocalization Relocalizer::Relocalize(const features::StereoFeatures& frame,
     best.reason = "the frame has no place words";
     return best;
   }
+  // In a building of look-alike corridors one view's best places are often look-alikes that
+  // verify (identical doors and lights); the chain of the segment's keyframes picks the place
+  // out, as it does for loops.
   const place_recognition::PlaceQuery places =
-      map.Candidates(words, allowed, options_.max_candidates, 0.0);
+      segment >= 0 ? map.SequenceCandidates(words, allowed, segment, options_.max_candidates)
+                   : map.Candidates(words, allowed, options_.max_candidates, 0.0);
   if (places.places_compared == 0) {
     best.reason = "no keyframe of the map to compare with";
     return best;

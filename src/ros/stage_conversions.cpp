@@ -276,6 +276,9 @@ stereo_fabmap_slam::RelocalizeFrame::Request ToRelocalizeFrameRequest(
   message.reference_keyframe_id = request.reference_keyframe;
   message.T_reference_camera = ToPoseMessage(request.T_reference_camera);
   message.add_edge = request.add_edge;
+  message.has_expected_pose = request.expected_T_map_camera.has_value();
+  if (request.expected_T_map_camera)
+    message.expected_T_map_camera = ToPoseMessage(*request.expected_T_map_camera);
   message.from_user = request.from_user;
   message.describe_ms = request.describe_ms;
   return message;
@@ -295,6 +298,8 @@ pipeline::RelocalizationRequest FromRelocalizeFrameRequest(
   request.T_reference_camera = FromPoseMessage(message.T_reference_camera);
   request.T_odom_camera = frame.T_world_camera;
   request.add_edge = message.add_edge;
+  if (message.has_expected_pose)
+    request.expected_T_map_camera = FromPoseMessage(message.expected_T_map_camera);
   request.from_user = message.from_user;
   request.describe_ms = message.describe_ms;
   return request;
@@ -318,6 +323,8 @@ stereo_fabmap_slam::RelocalizeFrame::Response ToRelocalizeFrameResponse(
   message.candidates = found.candidates;
   message.probability = found.probability;
   message.time_ms = answer.ms;
+  message.has_agreement = answer.agrees.has_value();
+  message.agrees = answer.agrees.value_or(false);
   message.edge_added = answer.edge.has_value();
   if (answer.edge) {
     message.edge = ToLoopEdgeMessage(*answer.edge);
@@ -343,6 +350,7 @@ pipeline::RelocalizationAnswer FromRelocalizeFrameResponse(
   answer.map_pose_known = message.map_pose_known;
   answer.T_map_camera = FromPoseMessage(message.T_map_camera);
   answer.ms = message.time_ms;
+  if (message.has_agreement) answer.agrees = message.agrees;
   if (message.edge_added) answer.edge = FromLoopEdgeMessage(message.edge);
   return answer;
 }

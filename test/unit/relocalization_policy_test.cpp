@@ -12,6 +12,16 @@ namespace {
 using pipeline::RelocalizationPolicy;
 using pipeline::RelocalizationRequest;
 
+// Recovery every n-th frame; with confirm_distance 0 the first success joins (the tests of
+// the other rules), otherwise a second success that far on must agree.
+relocalization::RelocalizerOptions Options(int attempt_every_n_frames,
+                                           double confirm_distance = 0) {
+  relocalization::RelocalizerOptions options;
+  options.attempt_every_n_frames = attempt_every_n_frames;
+  options.confirm_distance = confirm_distance;
+  return options;
+}
+
 odometry::TrackingResult Tracked(std::int64_t reference, bool keyframe = false,
                                  bool new_segment = false) {
   odometry::TrackingResult result;
@@ -38,6 +48,7 @@ RelocalizationRequest RequestOf(const RelocalizationPolicy::Decision& decision,
   RelocalizationRequest request;
   request.scope = decision.scope;
   request.add_edge = decision.add_edge;
+  request.expected_T_map_camera = decision.expected_T_map_camera;
   request.from_user = decision.from_user;
   request.reference_keyframe = result.reference_keyframe;
   request.T_odom_camera = result.T_world_camera;
@@ -62,7 +73,7 @@ pipeline::RelocalizationAnswer NotFound() {
 }
 
 TEST(RelocalizationPolicy, TrackingWithoutABreakAsksNothing) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   for (int i = 0; i < 5; ++i) {
     EXPECT_FALSE(policy.Decide(Tracked(0, i == 0), true).ask);
     EXPECT_TRUE(policy.on_map());
@@ -70,7 +81,7 @@ TEST(RelocalizationPolicy, TrackingWithoutABreakAsksNothing) {
 }
 
 TEST(RelocalizationPolicy, ALossStartsRecoveryInTheMapUntilFound) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   ASSERT_FALSE(policy.Decide(Tracked(0, true), true).ask);
   // Lost with too few points to start a segment: no pose to find, nothing asked.
   EXPECT_FALSE(policy.Decide(Lost(false), true).ask);
@@ -99,8 +110,64 @@ TEST(RelocalizationPolicy, ALossStartsRecoveryInTheMapUntilFound) {
   EXPECT_FALSE(policy.Decide(Tracked(5), true).ask);
 }
 
+// Identical corridors verify a pose metres off from one view: after a loss the first success
+// is a candidate, asked about again only from 0.5 m further on; a success there that disagrees
+// becomes the candidate, one that agrees joins the segment.
+TEST(RelocalizationPolicy, AfterALossASecondViewFromElsewhereMustAgree) {
+  RelocalizationPolicy policy(Options(1, 0.5));
+  policy.Decide(Tracked(0, true), true);
+  const auto at = [](double x, bool new_segment = false) {
+    odometry::TrackingResult result = Tracked(5, new_segment, new_segment);
+    result.T_world_camera.translation() = Eigen::Vector3d(x, 2, 3);
+    return result;
+  };
+  const odometry::TrackingResult first = at(1.0, true);
+  const RelocalizationPolicy::Decision probe = policy.Decide(first, true);
+  ASSERT_TRUE(probe.ask);
+  EXPECT_FALSE(probe.add_edge) << "one view proves nothing in a building of look-alikes";
+  EXPECT_FALSE(probe.expected_T_map_camera.has_value());
+  // Found with the camera at the map's origin: map -> odom takes (1, 2, 3) there.
+  EXPECT_TRUE(policy.OnAnswer(RequestOf(probe, first), Found(1, Eigen::Isometry3d::Identity()))
+                  .news.empty());
+  EXPECT_TRUE(policy.recovering());
+  EXPECT_FALSE(policy.on_map());
+  EXPECT_FALSE(policy.Decide(at(1.4), true).ask) << "0.4 m on: the same view, nearly";
+
+  const odometry::TrackingResult second = at(1.6);
+  const RelocalizationPolicy::Decision check = policy.Decide(second, true);
+  ASSERT_TRUE(check.ask);
+  EXPECT_TRUE(check.add_edge);
+  ASSERT_TRUE(check.expected_T_map_camera.has_value());
+  EXPECT_TRUE(check.expected_T_map_camera->translation().isApprox(Eigen::Vector3d(0.6, 0, 0)));
+  // Found 3 m away from where the candidate puts it (the place stage says so): a new candidate.
+  Eigen::Isometry3d elsewhere = Eigen::Isometry3d::Identity();
+  elsewhere.translation() = Eigen::Vector3d(3.6, 0, 0);
+  pipeline::RelocalizationAnswer disagreeing = Found(2, elsewhere);
+  disagreeing.agrees = false;
+  const pipeline::RelocalizationOutcome replaced =
+      policy.OnAnswer(RequestOf(check, second), disagreeing);
+  EXPECT_NE(replaced.news.find("disagrees with the candidate against keyframe 1"),
+            std::string::npos)
+      << replaced.news;
+  EXPECT_TRUE(policy.recovering());
+
+  const odometry::TrackingResult third = at(2.2);
+  const RelocalizationPolicy::Decision confirm = policy.Decide(third, true);
+  ASSERT_TRUE(confirm.ask);
+  ASSERT_TRUE(confirm.expected_T_map_camera.has_value());
+  EXPECT_TRUE(confirm.expected_T_map_camera->translation().isApprox(Eigen::Vector3d(4.2, 0, 0)))
+      << "the newer candidate's map -> odom";
+  pipeline::RelocalizationAnswer agreeing = Found(3, *confirm.expected_T_map_camera);
+  agreeing.agrees = true;
+  const pipeline::RelocalizationOutcome joined = policy.OnAnswer(RequestOf(confirm, third), agreeing);
+  EXPECT_NE(joined.news.find("as the candidate against keyframe 2 had it"), std::string::npos)
+      << joined.news;
+  EXPECT_FALSE(policy.recovering());
+  EXPECT_TRUE(policy.on_map());
+}
+
 TEST(RelocalizationPolicy, ALoopThatJoinedTheSegmentEndsRecovery) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   policy.Decide(Tracked(0, true), true);
   const odometry::TrackingResult first = Tracked(5, true, true);
   policy.OnAnswer(RequestOf(policy.Decide(first, true), first), NotFound());
@@ -114,15 +181,31 @@ TEST(RelocalizationPolicy, ALoopThatJoinedTheSegmentEndsRecovery) {
   EXPECT_FALSE(policy.Decide(Tracked(6), true).ask);
 }
 
+// A loop may join the new segment before any relocalization does (with a candidate waiting
+// for its confirmation): the frame's keyframe in the map ends recovery without a question.
+TEST(RelocalizationPolicy, ALoopSeenInTheMapEndsRecoveryWithoutAsking) {
+  RelocalizationPolicy policy(Options(1, 1.5));
+  policy.Decide(Tracked(0, true), true);
+  const odometry::TrackingResult first = Tracked(5, true, true);
+  policy.OnAnswer(RequestOf(policy.Decide(first, true), first),
+                  Found(1, Eigen::Isometry3d::Identity()));
+  EXPECT_TRUE(policy.recovering());
+  EXPECT_FALSE(policy.Decide(Tracked(6), true, /*reference_in_map=*/false).ask);
+  EXPECT_FALSE(policy.on_map());
+  EXPECT_FALSE(policy.Decide(Tracked(6), true, /*reference_in_map=*/true).ask);
+  EXPECT_FALSE(policy.recovering());
+  EXPECT_TRUE(policy.on_map());
+}
+
 TEST(RelocalizationPolicy, NothingToRecoverIntoBeforeTheMapHasKeyframes) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   EXPECT_FALSE(policy.Decide(Tracked(3, true, true), false).ask)
       << "the first segment becomes the map";
   EXPECT_TRUE(policy.on_map());
 }
 
 TEST(RelocalizationPolicy, RecoveryAsksEveryNthFrameWithAPose) {
-  RelocalizationPolicy policy(3);
+  RelocalizationPolicy policy(Options(3));
   policy.Decide(Tracked(0, true), true);
   std::vector<bool> asked;
   asked.push_back(policy.Decide(Tracked(4, true, true), true).ask);
@@ -132,7 +215,7 @@ TEST(RelocalizationPolicy, RecoveryAsksEveryNthFrameWithAPose) {
 }
 
 TEST(RelocalizationPolicy, AResetAndALoadedMapAreNamedWhenFoundAgain) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   policy.Decide(Tracked(0, true), true);
   policy.OnReset();
   const odometry::TrackingResult reset = Tracked(7, true, true);
@@ -152,7 +235,7 @@ TEST(RelocalizationPolicy, AResetAndALoadedMapAreNamedWhenFoundAgain) {
 }
 
 TEST(RelocalizationPolicy, LocalizationFindsTheCameraThenFollowsItAtKeyframes) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   policy.SetMode(pipeline::SlamMode::kLocalization, true);
   const odometry::TrackingResult first = Tracked(0, true);
   const RelocalizationPolicy::Decision decision = policy.Decide(first, true);
@@ -180,7 +263,7 @@ TEST(RelocalizationPolicy, LocalizationFindsTheCameraThenFollowsItAtKeyframes) {
 }
 
 TEST(RelocalizationPolicy, TheEndOfLocalizationModeStartsRecovery) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   policy.SetMode(pipeline::SlamMode::kLocalization, true);
   policy.SetMode(pipeline::SlamMode::kMapping, true);
   EXPECT_TRUE(policy.recovering());
@@ -190,7 +273,7 @@ TEST(RelocalizationPolicy, TheEndOfLocalizationModeStartsRecovery) {
 }
 
 TEST(RelocalizationPolicy, TheUsersRequestIsAnsweredByTheNextFrame) {
-  RelocalizationPolicy policy(1);
+  RelocalizationPolicy policy(Options(1));
   policy.Decide(Tracked(0, true), true);
   policy.RequestFromUser(/*reanchor=*/false);
   EXPECT_TRUE(policy.user_request_pending());
@@ -222,7 +305,7 @@ TEST(RelocalizationPolicy, TheUsersRequestIsAnsweredByTheNextFrame) {
 }
 
 TEST(RelocalizationPolicy, ARequestNoPlaceStageAnsweredIsAnsweredOnceAndTheRecoveryGoesOn) {
-  RelocalizationPolicy policy(2);
+  RelocalizationPolicy policy(Options(2));
   policy.Decide(Tracked(0, true), true);
   policy.Decide(Tracked(3, false, /*new_segment=*/true), true);  // a loss: recovering
   ASSERT_TRUE(policy.recovering());

@@ -43,8 +43,12 @@ class TrackingStageTest : public ::testing::Test {
     pipeline::FrontEndOptions options;
     options.tracker.parallel = false;
     options.place_features = options.features;  // so that relocalization can be asked
+    // The first success joins a new segment (confirmation by a second view has its own test,
+    // relocalization_policy_test's): the stage's answers, not the policy's, are tested here.
+    relocalization::RelocalizerOptions relocalization;
+    relocalization.confirm_distance = 0;
     stage_ = std::make_unique<pipeline::TrackingStage>(
-        options, rectifier_, pipeline::InputMonitorOptions(), 1, [] { return 0.0; });
+        options, rectifier_, pipeline::InputMonitorOptions(), relocalization, [] { return 0.0; });
     stamp_ = sequence_.frames()[0].timestamp_ns * 1e-9;
   }
 
@@ -228,7 +232,8 @@ TEST_F(TrackingStageTest, AStageCalibratedLaterCountsThePairsBeforeAndKeepsWhatI
   pipeline::FrontEndOptions options;
   options.tracker.parallel = false;
   options.place_features = options.features;
-  pipeline::TrackingStage stage(options, pipeline::InputMonitorOptions(), 1, [] { return 0.0; });
+  pipeline::TrackingStage stage(options, pipeline::InputMonitorOptions(),
+                                relocalization::RelocalizerOptions(), [] { return 0.0; });
   EXPECT_FALSE(stage.calibrated());
   EXPECT_THROW(stage.camera(), std::logic_error);
   const datasets::StereoImages images = sequence_.LoadStereoPair(0);

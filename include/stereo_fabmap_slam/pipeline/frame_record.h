@@ -28,7 +28,9 @@ struct FrameRecord {
   bool on_map = true;
   // The relocalization attempt of the frame, if any: its outcome, in one line (timing.csv).
   std::optional<std::string> relocalization;
-  bool relocalized = false;  // the attempt succeeded
+  // The attempt succeeded (recovering in mapping mode: and joined the segment to the map; a
+  // first success awaiting confirmation is not counted).
+  bool relocalized = false;
   // Localization mode: the frame's pose in the map when it was processed (map -> odom of the
   // latest relocalization times the odometry).
   std::optional<Eigen::Isometry3d> T_map_camera;

@@ -45,6 +45,10 @@ struct RelocalizationRequest {
   Eigen::Isometry3d T_reference_camera = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_odom_camera = Eigen::Isometry3d::Identity();  // the tracked pose
   bool add_edge = false;   // on success, make the relocalization edge (mapping stage)
+  // A candidate to confirm (mapping, after a loss): where an earlier relocalization's
+  // map -> odom puts this frame's camera. The edge is made only if the relocalization agrees
+  // with it (RelocalizerOptions::confirm_translation, confirm_rotation_deg).
+  std::optional<Eigen::Isometry3d> expected_T_map_camera;
   bool from_user = false;  // the relocalize service's request, not the recovery's
   double describe_ms = 0;  // place descriptors made for the request
 };
@@ -58,6 +62,8 @@ struct RelocalizationAnswer {
   bool map_pose_known = false;
   Eigen::Isometry3d T_map_camera = Eigen::Isometry3d::Identity();
   std::optional<map::LoopEdge> edge;  // for the mapping stage, when add_edge and found
+  // With an expected pose and success: whether the found pose agrees with it (no edge if not).
+  std::optional<bool> agrees;
   double ms = 0;                      // candidates, verification (and the request's describing)
 };
 

@@ -9,6 +9,7 @@
 #include "stereo_fabmap_slam/odometry/tracker.h"
 #include "stereo_fabmap_slam/pipeline/place_stage.h"
 #include "stereo_fabmap_slam/pipeline/slam_mode.h"
+#include "stereo_fabmap_slam/relocalization/relocalization_options.h"
 
 namespace stereo_fabmap_slam::pipeline {
 
@@ -34,15 +35,18 @@ struct RelocalizationOutcome {
 // When the tracking stage asks the place stage to find the camera in the map, and what it makes
 // of the answer. Mapping: a break of the odometry (a tracking loss that starts a new segment, a
 // reset, a loaded map, the end of localization mode) while the map has keyframes starts a
-// recovery: every n-th frame with a pose is relocalized against the map's keyframes only, and
-// the first success joins the frame's segment to the map with a relocalization edge (or the
-// place stage says a loop joined it already). Localization: relocalized until found, then at
+// recovery: every n-th frame with a pose is relocalized against the map's keyframes only; the
+// first success is a candidate, and the first success from a camera confirm_distance further
+// along the odometry that agrees with it joins the frame's segment to the map with a
+// relocalization edge (one that disagrees becomes the candidate instead); or the place stage
+// says a loop joined it already. Localization: relocalized until found, then at
 // every keyframe; each success gives map -> odom. A user's request (the relocalize service) is
 // answered by the next frame: a check of the view, which corrects map -> odom only if asked to
 // re-anchor. No clock, no thread.
 class RelocalizationPolicy {
  public:
-  explicit RelocalizationPolicy(int attempt_every_n_frames);
+  // Reads attempt_every_n_frames and confirm_distance (0: the first success joins).
+  explicit RelocalizationPolicy(const relocalization::RelocalizerOptions& options);
 
   void SetMode(SlamMode mode, bool map_has_keyframes);
   void OnMapLoaded();
@@ -57,12 +61,17 @@ class RelocalizationPolicy {
     bool ask = false;  // make a RelocalizationRequest with the fields below
     RelocalizationRequest::Scope scope = RelocalizationRequest::Scope::kAnywhere;
     bool add_edge = false;
+    // Recovery with a candidate: where its map -> odom puts this frame's camera.
+    std::optional<Eigen::Isometry3d> expected_T_map_camera;
     bool from_user = false;
     // A relocalization was due or asked for, but the frame has no pose to give (lost): why.
     std::string failure;
   };
   // After the tracker's result for a frame: whether (and how) to ask the place stage.
-  Decision Decide(const odometry::TrackingResult& result, bool map_has_keyframes);
+  // `reference_in_map`: the map holds the frame's reference keyframe, i.e. a loop has joined the
+  // frame's segment to the map (recovery then ends without asking).
+  Decision Decide(const odometry::TrackingResult& result, bool map_has_keyframes,
+                  bool reference_in_map = false);
   RelocalizationOutcome OnAnswer(const RelocalizationRequest& request,
                                  const RelocalizationAnswer& answer);
   // The user's request could not be asked (Decision::failure): its answer.
@@ -80,12 +89,20 @@ class RelocalizationPolicy {
 
  private:
   int every_;
+  double confirm_distance_;
   SlamMode mode_ = SlamMode::kMapping;
   bool recovering_ = false;  // mapping: the odometry's segment is not in the map
   bool localized_ = false;   // localization: T_map_odom_ holds
   Eigen::Isometry3d T_map_odom_ = Eigen::Isometry3d::Identity();
   int frames_since_attempt_ = 0;
   std::string break_reason_ = "tracking loss";
+  // Mapping recovery: the first success of the segment, awaiting a second from elsewhere.
+  struct Candidate {
+    Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
+    Eigen::Vector3d odom_position = Eigen::Vector3d::Zero();  // of the camera it was found from
+    std::int64_t keyframe_id = -1;
+  };
+  std::optional<Candidate> candidate_;
   struct UserRequest {
     bool reanchor = false;
   };

@@ -51,23 +51,26 @@ class TrackingStage {
  public:
   using Clock = StereoFrontEnd::Clock;
 
-  // Relocalization is asked only with place recognition on (options.place_features), every
-  // `attempt_every_n_frames`-th frame while recovering.
+  // Relocalization is asked only with place recognition on (options.place_features), as
+  // `relocalization` says (attempt_every_n_frames, confirm_distance: RelocalizationPolicy).
   TrackingStage(const FrontEndOptions& options, const camera::StereoRectifier& rectifier,
-                const InputMonitorOptions& input, int attempt_every_n_frames, Clock clock);
+                const InputMonitorOptions& input,
+                const relocalization::RelocalizerOptions& relocalization, Clock clock);
   // A stage whose camera is known later (a driver that reads the calibration from camera_info):
   // until Calibrate it refuses every pair (counted, and named by an event), while mode changes,
   // a loaded map and the relocalize service's requests are taken as always.
   TrackingStage(const FrontEndOptions& options, const InputMonitorOptions& input,
-                int attempt_every_n_frames, Clock clock);
+                const relocalization::RelocalizerOptions& relocalization, Clock clock);
   // The camera, once (std::logic_error for a second time), and its pose in odom at the first
   // frame (Tracker::SetStartPose): the nodelet's odom is the base's frame at the first frame, so
   // its camera starts at its mounting.
   void Calibrate(const camera::StereoRectifier& rectifier,
                  const Eigen::Isometry3d& T_odom_camera = Eigen::Isometry3d::Identity());
   bool calibrated() const { return front_end_.has_value(); }
-  // Another recovery rate (before the first frame).
-  void SetAttemptEveryNFrames(int n) { policy_ = RelocalizationPolicy(n); }
+  // Other recovery settings (before the first frame).
+  void SetRelocalizationOptions(const relocalization::RelocalizerOptions& relocalization) {
+    policy_ = RelocalizationPolicy(relocalization);
+  }
 
   // One stereo pair: checked, tracked, and, if one is due, the relocalization request made.
   // `map`: what the mapping stage says of the map (null without loop closing).

@@ -91,6 +91,14 @@ class LoopDetector {
                         int max_candidates, double min_probability,
                         double min_log_odds = -std::numeric_limits<double>::infinity()) const;
 
+  // The same for a view of odometry segment `segment` that is no keyframe (a relocalization
+  // attempt), ranked as loop detection ranks that segment's keyframes: by the sequence score of
+  // the segment's chain of keyframes so far followed by this view (one view alone if the chain
+  // is of another segment, or sequence_length is 1). No floor: the best max_candidates.
+  PlaceQuery SequenceCandidates(const std::vector<int>& words,
+                                const std::function<bool(const map::StoredKeyframe&)>& allowed,
+                                std::int64_t segment, int max_candidates) const;
+
   // The bundle adjustment moved a keyframe (odom frame).
   void UpdatePose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
     database_.UpdatePose(id, T_odom_camera);
@@ -105,6 +113,11 @@ class LoopDetector {
   void AddPlace(const map::StoredKeyframe& stored);
   LoopCandidate Verify(const map::StoredKeyframe& query,
                        const map::StoredKeyframe& candidate) const;
+  // FAB-MAP over the places `mask` flags, with each one's log odds against a new place in
+  // `log_odds` (-infinity for the others); nothing to compare (no place, no word): posterior
+  // all 0.
+  FabMapResult CompareAllowed(const std::vector<int>& words, const std::vector<char>& mask,
+                              std::vector<double>* log_odds) const;
   // Which places `allowed` accepts: one flag per FAB-MAP place.
   std::vector<char> AllowedPlaces(
       const std::function<bool(const map::StoredKeyframe&)>& allowed) const;

@@ -36,10 +36,16 @@ class SequenceScore {
   // a chain's earlier query did not know (added since, or no candidate then) adds nothing to it
   // there: no evidence either way.
   std::vector<double> Push(const std::vector<double>& log_odds);
+  // The scores Push would return, without adding the query to the sequence (a view that is no
+  // keyframe of it: a relocalization attempt).
+  std::vector<double> Peek(const std::vector<double>& log_odds) const;
   // The sequence of views is broken (tracking lost, a new map): chains start afresh.
   void Reset() { history_.clear(); }
 
  private:
+  // The scores of the chains over `history` (oldest first) that end at its newest query.
+  std::vector<double> Score(const std::deque<std::vector<double>>& history) const;
+
   SequenceScoreOptions options_;
   std::deque<std::vector<double>> history_;  // the last `length` queries' log odds, oldest first
 };

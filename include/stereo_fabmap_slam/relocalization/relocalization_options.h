@@ -44,6 +44,23 @@ struct RelocalizerOptions {
   // Automatic recovery after tracking loss: attempt on every n-th frame while lost. 1: every
   // frame; an attempt costs a few ms against the tracker's 6-8 ms and the 50 ms of a 20 Hz frame.
   int attempt_every_n_frames = 1;
+  // Mapping, after a loss: the first success is a candidate; a second one from a camera at
+  // least confirm_distance further along the new segment's odometry must put the camera where
+  // the first one's map -> odom does before a relocalization edge joins the segment to the map
+  // (one that disagrees becomes the candidate). One view cannot tell identical corridors apart:
+  // their doors and lights verify a pose metres off with 150+ inliers spread over the whole
+  // image (docs/place_recognition.md), and a view half a metre on, still of doors and lights,
+  // agrees with it. Further on the view holds what tells corridors apart (a poster, a notice
+  // board, the corridor's end): buildings space such things a few metres apart. 1.5 m: longer
+  // than the loop detector's chain of keyframes (5 x 0.25 m), which keeps loops right the same
+  // way where no loss broke the odometry. A kidnapped camera is not kept waiting: the loop
+  // detector joins its segment as soon as a keyframe of it verifies. 0: the first success joins.
+  double confirm_distance = 1.5;  // [m]
+  // Agreement: the two relocalizations each good to a centimetre or two (translation_sigma);
+  // these bounds leave room for that and for the pose graph moving the map between the two,
+  // and lie far below the spacing of a building's repeated doors and lights (metres).
+  double confirm_translation = 0.15;  // [m]
+  double confirm_rotation_deg = 2;    // [deg]
   // Uncertainty of a relocalization edge in the pose graph: as a verified loop's.
   double translation_sigma = 0.02;  // [m]
   double rotation_sigma_deg = 0.2;  // [deg]

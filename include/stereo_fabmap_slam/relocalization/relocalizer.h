@@ -60,10 +60,13 @@ class Relocalizer {
               int descriptor_norm, double max_descriptor_distance);
 
   // `frame`: the odometry's stereo features of the frame; `words`: its place words
-  // (LoopDetector::Words of its place descriptors).
+  // (LoopDetector::Words of its place descriptors). `segment`: the frame's odometry segment, if
+  // its keyframes are in the map's database: candidates are then ranked by the segment's chain
+  // of keyframes followed by this view (LoopDetector::SequenceCandidates), not by this view
+  // alone; -1: this view alone (a lost camera with no segment behind it, a check of one view).
   Relocalization Relocalize(const features::StereoFeatures& frame, const std::vector<int>& words,
                             const place_recognition::LoopDetector& map,
-                            const KeyframeFilter& allowed) const;
+                            const KeyframeFilter& allowed, std::int64_t segment = -1) const;
 
   const RelocalizerOptions& options() const { return options_; }
 
