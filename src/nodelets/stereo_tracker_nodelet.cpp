@@ -75,8 +75,8 @@ void StereoTrackerNodelet::onInit() {
   const ros_wiring::TrackerParameters& p = parameters_;
   NODELET_INFO_STREAM("options in force:\n" << p.printed);
   for (const std::string& warning : p.warnings) NODELET_WARN("%s", warning.c_str());
-  stage_ = std::make_unique<pipeline::TrackingStage>(
-      p.options, p.monitor, p.relocalizer, ros_wiring::SteadyMilliseconds);
+  stage_ = std::make_unique<pipeline::TrackingStage>(p.options, p.monitor, p.relocalizer,
+                                                     ros_wiring::SteadyMilliseconds);
   pairs_.Configure(p.options.tracker.queued_pairs, p.options.tracker.catch_up_gap,
                    &stage_->input());
   outputs_ = std::make_unique<ros_wiring::TrackerOutputs>(node, p.frames, p.publish_tf);

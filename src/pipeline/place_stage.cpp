@@ -100,10 +100,10 @@ RelocalizationAnswer PlaceStage::Relocalize(const RelocalizationRequest& request
   }
   // Recovery: ranked by the chain of the frame's segment so far, as its loops are.
   const map::KeyframeDatabase& database = detector_.database();
-  const std::int64_t segment =
-      in_map_only && request.reference_keyframe >= 0 && database.Contains(request.reference_keyframe)
-          ? database.Get(request.reference_keyframe).segment
-          : -1;
+  const std::int64_t segment = in_map_only && request.reference_keyframe >= 0 &&
+                                       database.Contains(request.reference_keyframe)
+                                   ? database.Get(request.reference_keyframe).segment
+                                   : -1;
   answer.result = relocalizer_.Relocalize(
       request.features, detector_.Words(request.place_descriptors), detector_,
       [&](const map::StoredKeyframe& keyframe) {

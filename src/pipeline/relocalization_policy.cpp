@@ -26,10 +26,10 @@ void RelocalizationPolicy::SetMode(SlamMode mode, bool map_has_keyframes) {
     recovering_ = map_has_keyframes;
     break_reason_ = "localization mode";
   }
+  if (mode != mode_) candidate_.reset();
   mode_ = mode;
   localized_ = false;
   frames_since_attempt_ = 0;
-  candidate_.reset();
 }
 
 void RelocalizationPolicy::OnMapLoaded() {
@@ -103,11 +103,12 @@ RelocalizationPolicy::Decision RelocalizationPolicy::Decide(const odometry::Trac
   // fine it corrects map -> odom only when the user asks to re-anchor. Localization never
   // changes the map: the result moves map -> odom instead.
   // A recovery's first success is only a candidate: no edge until one from elsewhere agrees.
-  // (A user's check from near the candidate is answered without an edge.)
+  // While recovering, a user's request follows the same rule (re-anchoring or not: one view
+  // proves nothing in a building of look-alikes); one from near the candidate is a check only.
   const bool confirming = recover && candidate_.has_value() && far_from_candidate;
   decision.add_edge =
       mode_ == SlamMode::kMapping &&
-      ((recover && (confirm_distance_ == 0 || confirming)) || (from_user && user_request_->reanchor));
+      (recover ? confirm_distance_ == 0 || confirming : from_user && user_request_->reanchor);
   if (confirming) decision.expected_T_map_camera = candidate_->T_map_odom * result.T_world_camera;
   return decision;
 }

@@ -55,9 +55,9 @@ TrackingOutput TrackingStage::Process(const StereoPair& pair, const MapState* ma
   if (!map_followed_) return output;
 
   const odometry::TrackingResult& result = output.tracking;
-  const RelocalizationPolicy::Decision decision = policy_.Decide(
-      result, !map->empty(),
-      result.reference_keyframe >= 0 && map->InMap(result.reference_keyframe));
+  const RelocalizationPolicy::Decision decision =
+      policy_.Decide(result, !map->empty(),
+                     result.reference_keyframe >= 0 && map->InMap(result.reference_keyframe));
   if (!decision.failure.empty()) {
     output.relocalization_failure = decision.failure;
     if (decision.from_user) output.user = policy_.FailUserRequest(decision.failure);
@@ -103,13 +103,14 @@ FrameRecord TrackingStage::RecordFrame(const TrackingOutput& output, double time
   record.note = result.reason;
   if (answer != nullptr) {
     RecordRelocalization(*answer, &record);
-    if (answer->result.success() && policy_.mode() == SlamMode::kMapping &&
-        policy_.recovering()) {
-      // A recovery's success that left the segment off the map: a candidate for a second view
-      // from elsewhere to confirm (RelocalizationPolicy), not yet a relocalization.
+    if (answer->result.success() && policy_.mode() == SlamMode::kMapping && policy_.recovering()) {
+      // A recovery's success that left the segment off the map (RelocalizationPolicy): the
+      // candidate, a user's check of the view near it, or a view from elsewhere that disagrees
+      // with it (the new candidate); not yet a relocalization.
       record.relocalized = false;
-      *record.relocalization += answer->agrees ? "; disagrees with the candidate, replaces it"
-                                               : "; a candidate, to be confirmed";
+      *record.relocalization += answer->agrees.has_value()
+                                    ? "; disagrees with the candidate, replaces it"
+                                    : "; a candidate, to be confirmed";
     } else if (answer->agrees.value_or(false)) {
       *record.relocalization += "; agrees with the candidate";
     }

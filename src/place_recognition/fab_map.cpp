@@ -387,10 +387,12 @@ int FabMap::PlaceToUpdate(const std::vector<int>& words, const FabMapResult& res
                           const std::vector<char>& eligible) const {
   if (result.best < 0) return -1;
   // The best place when it may take the view, with its log odds as Compare gave them (location
-  // prior included); otherwise the likeliest of those that may, each on its own evidence.
+  // prior included); otherwise the likeliest of those that may, with the best's prior (the
+  // uniform prior gives every place the same): the same test, whichever place is best.
   int best = result.best;
   double log_odds = result.best_log_odds;
   if (!eligible[static_cast<std::size_t>(best)]) {
+    const std::size_t overall = static_cast<std::size_t>(result.best);
     best = -1;
     for (std::size_t i = 0; i < eligible.size(); ++i) {
       if (eligible[i] && (best < 0 || result.log_likelihoods[i] >
@@ -398,7 +400,8 @@ int FabMap::PlaceToUpdate(const std::vector<int>& words, const FabMapResult& res
         best = static_cast<int>(i);
     }
     if (best < 0) return -1;
-    log_odds = result.CandidateLogOdds(best);
+    log_odds = result.best_log_odds + result.log_likelihoods[static_cast<std::size_t>(best)] -
+               result.log_likelihoods[overall];
   }
   if (log_odds < options_.match_log_odds) return -1;
   if (options_.update_near_first_view) {
@@ -442,10 +445,11 @@ FabMapResult FabMap::Add(const std::vector<int>& words, const ViewPose& where, i
     const Eigen::Vector3d axis = where.T_world_camera.linear().col(2);
     for (std::size_t i = 0; i < founded_at_.size(); ++i) {
       const std::optional<ViewPose>& founded = founded_at_[i];
-      eligible[i] = founded && founded->segment == where.segment &&
-                    (founded->T_world_camera.translation() - where.T_world_camera.translation())
-                            .norm() <= options_.max_place_extent &&
-                    founded->T_world_camera.linear().col(2).dot(axis) >= min_axis_cosine;
+      eligible[i] =
+          founded && founded->segment == where.segment &&
+          (founded->T_world_camera.translation() - where.T_world_camera.translation()).norm() <=
+              options_.max_place_extent &&
+          founded->T_world_camera.linear().col(2).dot(axis) >= min_axis_cosine;
     }
   }
   const int update = PlaceToUpdate(words, result, eligible);

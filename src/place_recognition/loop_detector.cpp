@@ -172,8 +172,7 @@ FabMapResult LoopDetector::CompareAllowed(const std::vector<int>& words,
 PlaceQuery LoopDetector::SequenceCandidates(
     const std::vector<int>& words, const std::function<bool(const map::StoredKeyframe&)>& allowed,
     std::int64_t segment, int max_candidates) const {
-  const bool chained =
-      options_.sequence_length > 1 && segment >= 0 && segment == sequence_segment_;
+  const bool chained = options_.sequence_length > 1 && segment >= 0 && segment == sequence_segment_;
   if (!chained) return Candidates(words, allowed, max_candidates, 0.0);
   const std::vector<char> mask = AllowedPlaces(allowed);
   std::vector<double> log_odds;

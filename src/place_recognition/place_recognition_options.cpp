@@ -99,7 +99,8 @@ void LoopDetectorOptions::Validate() const {
     throw std::invalid_argument("loop_detection.min_probability must lie in [0, 1]");
   }
   if (std::isnan(min_log_odds) || min_log_odds == std::numeric_limits<double>::infinity())
-    throw std::invalid_argument("loop_detection.min_log_odds must be a number (or -inf)");
+    throw std::invalid_argument(
+        "loop_detection.min_log_odds must be a number (or -.inf: no floor)");
   if (max_candidates < 1) throw std::invalid_argument("loop_detection.max_candidates must be >= 1");
   if (sequence_length < 1 || sequence_max_step < 0) {
     throw std::invalid_argument(

@@ -69,8 +69,7 @@ Relocalizer::Relocalizer(const RelocalizerOptions& options, const geometry::Ster
 Relocalization Relocalizer::Relocalize(const features::StereoFeatures& frame,
                                        const std::vector<int>& words,
                                        const place_recognition::LoopDetector& map,
-                                       const KeyframeFilter& allowed,
-                                       std::int64_t segment) const {
+                                       const KeyframeFilter& allowed, std::int64_t segment) const {
   Relocalization best;
   if (map.database().empty()) {
     best.status = RelocalizationStatus::kEmptyMap;

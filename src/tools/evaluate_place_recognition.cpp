@@ -123,11 +123,12 @@ void AddWords(const place_recognition::Vocabulary& vocabulary, const cv::Mat& de
 }
 
 // The stereo odometry alone (StereoSlam without loop closing) over every pair of the sequence:
-// where it put each pair's rectified left camera, and in which segment (a tracking loss starts
-// the next). Only what the running system itself knows; ground truth stays for judging.
-std::vector<place_recognition::ViewPose> OdometryPoses(
-    const datasets::EurocSequence& sequence, const camera::StereoRectifier& rectifier,
-    const tools::SlamConfiguration& options) {
+// where it put each pair's rectified left camera, and in which segment: every lost frame starts
+// the next, also one whose map the tracker kept (conservative: places of the two sides are then
+// never one). Only what the running system itself knows; ground truth stays for judging.
+std::vector<place_recognition::ViewPose> OdometryPoses(const datasets::EurocSequence& sequence,
+                                                       const camera::StereoRectifier& rectifier,
+                                                       const tools::SlamConfiguration& options) {
   pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier,
                             [] { return NowSeconds() * 1e3; });
   std::vector<place_recognition::ViewPose> poses(sequence.size());
@@ -140,7 +141,7 @@ std::vector<place_recognition::ViewPose> OdometryPoses(
     if (frame == nullptr || frame->state == odometry::TrackingState::kLost) {
       lost = true;  // no pose: segment -1
     } else {
-      if (lost && i > 0) ++segment;
+      if (lost) ++segment;
       lost = false;
       poses[i].segment = segment;
       poses[i].T_world_camera = frame->T_world_camera;
@@ -501,11 +502,11 @@ int main(int argc, char** argv) {
          place_options.fabmap.max_place_turn_deg < 180) &&
         !args->Flag("no-odometry");
     const double start = NowSeconds();
-    const Input input = args->Value("gt") ? ReadFolder(source, *args->Value("gt"), every,
-                                                       exclude_frames, place_options, vocabulary)
-                                          : ReadSequence(source, every, relevance, exclude_seconds,
-                                                         options, place_options, vocabulary,
-                                                         with_odometry);
+    const Input input = args->Value("gt")
+                            ? ReadFolder(source, *args->Value("gt"), every, exclude_frames,
+                                         place_options, vocabulary)
+                            : ReadSequence(source, every, relevance, exclude_seconds, options,
+                                           place_options, vocabulary, with_odometry);
     std::fprintf(stderr, "features, words and ground truth: %.1f s\n", NowSeconds() - start);
     const evaluation::ExcludedPairs excluded =
         evaluation::CountExcludedPairs(input.frames, *input.truth);

@@ -297,8 +297,7 @@ TEST(EvaluatePlaceRecognitionTool, UpdatedPlacesInTheOfficeStayNearWhereTheyWere
     std::string output;
     const std::string out = temp.path() + "/out" + (odometry.empty() ? "" : "_appearance");
     ASSERT_EQ(RunCommand(std::string(EVALUATE_PLACE_RECOGNITION_BIN) + " " + sequence +
-                             " --every 4 --places update" + odometry + " --output " + out +
-                             " 2>&1",
+                             " --every 4 --places update" + odometry + " --output " + out + " 2>&1",
                          &output),
               0)
         << output;

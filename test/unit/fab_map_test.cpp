@@ -492,9 +492,10 @@ TEST(FabMap, UpdateNearFirstViewStopsAChainOfViews) {
 // of the corridor shows (identical doors, lights) and 10 of its own location's (what differs a
 // door further on). By appearance alone the corridor's words outweigh the rest and places grow
 // down the corridor; with the odometry's positions a place takes only views within
-// max_place_extent (1 m) of where it was founded: at most 9 views a pass (the founding one and
-// 4 on either side), 18 of the 162, and the second pass, 0.3 m of drift off the first, updates
-// the first pass's places instead of founding its own.
+// max_place_extent (1 m) of where it was founded: at most the 9 views of a pass within 1 m
+// either side (the first pass fills only the 5 ahead; the second, 0.3 m of drift off the first,
+// may reach behind), 18 of the 162, and the second pass updates the first pass's places
+// instead of founding its own.
 TEST(FabMap, UpdatedPlacesSpreadNoFartherThanTheOdometrySays) {
   RandomWordSets random_sets(300, 6);
   std::vector<std::vector<int>> training;

@@ -110,9 +110,9 @@ TEST(LoopClosing, RenderedLoopIsClosedWithoutFalseLoops) {
 // back along the first corridor. The revisit must be found, and no loop may join look-alike
 // doors or posters of different corridors (keyframes > 1 m apart in ground truth: a true
 // revisit passes within 0.15 m of an old keyframe, and corridors lie metres apart). The bound
-// on the trajectory is the target: half the odometry's error (measured on 95 s of this
-// seed: 47 loops from 80.6 s on, none far, 7.85 cm against 30.6 cm; on the 170 s seed-11 route
-// of docs/place_recognition.md 32 %).
+// on the trajectory is the target: half the odometry's error (measured on these 90 s:
+// 33 loops, none far, 7.81 cm against 26.2 cm; on the 170 s seed-11 route of
+// docs/place_recognition.md 31 %).
 TEST(LoopClosing, OfficeLoopIsClosedWithoutLoopsBetweenLookAlikeCorridors) {
   TemporaryDirectory temp;
   const auto [sequence, summary] = MapRenderedRoute(temp, "loop", 90, 21, "office");

@@ -393,13 +393,12 @@ TEST(PlaceRecognitionQueries, TwoPassesOfHandBuiltPlacesGiveAKnownCurve) {
   EXPECT_EQ(summary.declared_new, 0);  // tf-idf has no new-place decision
 }
 
-// A revisit run through places 2, 3, 4 (log odds 10 each), and at the last query a look-alike
-// at place 9 (15) where the earlier queries saw nothing like it (-20).
 // A relocalization attempt is scored against the chain without joining it: Peek gives what
 // Push would, and the chain goes on as if the attempt had not been made.
 TEST(SequenceScore, PeekScoresAViewWithoutAddingItToTheChain) {
   std::vector<std::vector<double>> queries(4, std::vector<double>(8, -5.0));
-  for (int t = 0; t < 4; ++t) queries[static_cast<std::size_t>(t)][static_cast<std::size_t>(1 + t)] = 7;
+  for (int t = 0; t < 4; ++t)
+    queries[static_cast<std::size_t>(t)][static_cast<std::size_t>(1 + t)] = 7;
   place_recognition::SequenceScore peeked({3, 1}), pushed({3, 1});
   for (int t = 0; t < 3; ++t) {
     peeked.Push(queries[static_cast<std::size_t>(t)]);
@@ -414,6 +413,8 @@ TEST(SequenceScore, PeekScoresAViewWithoutAddingItToTheChain) {
   EXPECT_DOUBLE_EQ(peeked.Push(queries[3])[4], 21);
 }
 
+// A revisit run through places 2, 3, 4 (log odds 10 each), and at the last query a look-alike
+// at place 9 (15) where the earlier queries saw nothing like it (-20).
 TEST(SequenceScore, AChainOfNeighbouringMatchesOutranksALoneLookAlike) {
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<std::vector<double>> queries(3, std::vector<double>(10, -20.0));

@@ -159,7 +159,8 @@ TEST(RelocalizationPolicy, AfterALossASecondViewFromElsewhereMustAgree) {
       << "the newer candidate's map -> odom";
   pipeline::RelocalizationAnswer agreeing = Found(3, *confirm.expected_T_map_camera);
   agreeing.agrees = true;
-  const pipeline::RelocalizationOutcome joined = policy.OnAnswer(RequestOf(confirm, third), agreeing);
+  const pipeline::RelocalizationOutcome joined =
+      policy.OnAnswer(RequestOf(confirm, third), agreeing);
   EXPECT_NE(joined.news.find("as the candidate against keyframe 2 had it"), std::string::npos)
       << joined.news;
   EXPECT_FALSE(policy.recovering());
@@ -195,6 +196,56 @@ TEST(RelocalizationPolicy, ALoopSeenInTheMapEndsRecoveryWithoutAsking) {
   EXPECT_FALSE(policy.Decide(Tracked(6), true, /*reference_in_map=*/true).ask);
   EXPECT_FALSE(policy.recovering());
   EXPECT_TRUE(policy.on_map());
+}
+
+// While a candidate waits: a user's request near it is a check (no edge, even to re-anchor,
+// and the candidate stays); one from elsewhere is the confirmation; a break of the odometry, a
+// loaded map or a change of mode drops the candidate, whose map -> odom no longer holds.
+TEST(RelocalizationPolicy, ACandidateWaitsForAViewFromElsewhereWhateverTheUserAsks) {
+  const auto at = [](double x, bool new_segment = false) {
+    odometry::TrackingResult result = Tracked(5, new_segment, new_segment);
+    result.T_world_camera.translation() = Eigen::Vector3d(x, 2, 3);
+    return result;
+  };
+  const auto with_candidate = [&](RelocalizationPolicy* policy) {
+    policy->Decide(Tracked(0, true), true);
+    const odometry::TrackingResult first = at(1.0, true);
+    policy->OnAnswer(RequestOf(policy->Decide(first, true), first),
+                     Found(1, Eigen::Isometry3d::Identity()));
+    ASSERT_TRUE(policy->recovering());
+  };
+  RelocalizationPolicy policy(Options(1, 1.5));
+  with_candidate(&policy);
+  policy.RequestFromUser(/*reanchor=*/true);
+  const odometry::TrackingResult near = at(1.5);
+  const RelocalizationPolicy::Decision check = policy.Decide(near, true);
+  ASSERT_TRUE(check.ask);
+  EXPECT_TRUE(check.from_user);
+  EXPECT_FALSE(check.add_edge) << "one view, the user's or not, joins nothing";
+  EXPECT_FALSE(check.expected_T_map_camera.has_value());
+  Eigen::Isometry3d elsewhere = Eigen::Isometry3d::Identity();
+  elsewhere.translation() = Eigen::Vector3d(9, 0, 0);
+  const pipeline::RelocalizationOutcome checked =
+      policy.OnAnswer(RequestOf(check, near), Found(7, elsewhere));
+  ASSERT_TRUE(checked.user.has_value());
+  EXPECT_TRUE(policy.recovering());
+  // The candidate is still the first one: the view from 1.5 m on is checked against it.
+  const RelocalizationPolicy::Decision confirm = policy.Decide(at(2.5), true);
+  ASSERT_TRUE(confirm.ask);
+  EXPECT_TRUE(confirm.add_edge);
+  ASSERT_TRUE(confirm.expected_T_map_camera.has_value());
+  EXPECT_TRUE(confirm.expected_T_map_camera->translation().isApprox(Eigen::Vector3d(1.5, 0, 0)));
+
+  // A break while the candidate waits: the new segment's first view is a probe again.
+  EXPECT_FALSE(policy.Decide(at(3.0, true), true).add_edge);
+  RelocalizationPolicy loaded(Options(1, 1.5));
+  with_candidate(&loaded);
+  loaded.OnMapLoaded();
+  EXPECT_FALSE(loaded.Decide(at(2.5), true).expected_T_map_camera.has_value());
+  RelocalizationPolicy same_mode(Options(1, 1.5));
+  with_candidate(&same_mode);
+  same_mode.SetMode(pipeline::SlamMode::kMapping, true);  // no change: the candidate stays
+  EXPECT_TRUE(same_mode.Decide(at(2.5), true).expected_T_map_camera.has_value());
 }
 
 TEST(RelocalizationPolicy, NothingToRecoverIntoBeforeTheMapHasKeyframes) {

@@ -87,8 +87,8 @@ PlaceMapShape DescribePlaces(const PlaceRecognitionFrames& frames, const PlaceGr
 // match when ground truth links the query to one of the place's frames outside the window;
 // best_frame is that frame, or the place's latest frame outside the window if none is.
 // declared_new comes from the comparison with the whole map, recent frames included: Add's
-// decision by appearance. `fabmap` must be empty; it holds the places afterwards. Throws std::invalid_argument
-// if the frames and the ground truth differ in size.
+// decision by appearance. `fabmap` must be empty; it holds the places afterwards. Throws
+// std::invalid_argument if the frames and the ground truth differ in size.
 FabMapQueries RunFabMapQueries(const PlaceRecognitionFrames& frames, const PlaceGroundTruth& truth,
                                const FabMapQueryOptions& options, place_recognition::FabMap* fabmap,
                                const QueryProgress& progress = nullptr);

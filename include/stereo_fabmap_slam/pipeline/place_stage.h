@@ -44,7 +44,7 @@ struct RelocalizationRequest {
   std::int64_t reference_keyframe = -1;
   Eigen::Isometry3d T_reference_camera = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_odom_camera = Eigen::Isometry3d::Identity();  // the tracked pose
-  bool add_edge = false;   // on success, make the relocalization edge (mapping stage)
+  bool add_edge = false;  // on success, make the relocalization edge (mapping stage)
   // A candidate to confirm (mapping, after a loss): where an earlier relocalization's
   // map -> odom puts this frame's camera. The edge is made only if the relocalization agrees
   // with it (RelocalizerOptions::confirm_translation, confirm_rotation_deg).
@@ -64,7 +64,7 @@ struct RelocalizationAnswer {
   std::optional<map::LoopEdge> edge;  // for the mapping stage, when add_edge and found
   // With an expected pose and success: whether the found pose agrees with it (no edge if not).
   std::optional<bool> agrees;
-  double ms = 0;                      // candidates, verification (and the request's describing)
+  double ms = 0;  // candidates, verification (and the request's describing)
 };
 
 // What a loaded map means to the other stages.

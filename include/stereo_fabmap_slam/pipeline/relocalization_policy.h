@@ -36,13 +36,13 @@ struct RelocalizationOutcome {
 // of the answer. Mapping: a break of the odometry (a tracking loss that starts a new segment, a
 // reset, a loaded map, the end of localization mode) while the map has keyframes starts a
 // recovery: every n-th frame with a pose is relocalized against the map's keyframes only; the
-// first success is a candidate, and the first success from a camera confirm_distance further
-// along the odometry that agrees with it joins the frame's segment to the map with a
-// relocalization edge (one that disagrees becomes the candidate instead); or the place stage
-// says a loop joined it already. Localization: relocalized until found, then at
-// every keyframe; each success gives map -> odom. A user's request (the relocalize service) is
-// answered by the next frame: a check of the view, which corrects map -> odom only if asked to
-// re-anchor. No clock, no thread.
+// first success is a candidate, and the first success from a camera confirm_distance (straight
+// line, odometry) from it that agrees with it joins the frame's segment to the map with a
+// relocalization edge (one that disagrees becomes the candidate instead); or a loop joined it
+// (the frame's keyframe is in the map, or the place stage says so). Localization: relocalized until
+// found, then at every keyframe; each success gives map -> odom. A user's request (the relocalize
+// service) is answered by the next frame: a check of the view, which corrects map -> odom only if
+// asked to re-anchor. No clock, no thread.
 class RelocalizationPolicy {
  public:
   // Reads attempt_every_n_frames and confirm_distance (0: the first success joins).

@@ -45,9 +45,10 @@ struct RelocalizerOptions {
   // frame; an attempt costs a few ms against the tracker's 6-8 ms and the 50 ms of a 20 Hz frame.
   int attempt_every_n_frames = 1;
   // Mapping, after a loss: the first success is a candidate; a second one from a camera at
-  // least confirm_distance further along the new segment's odometry must put the camera where
-  // the first one's map -> odom does before a relocalization edge joins the segment to the map
-  // (one that disagrees becomes the candidate). One view cannot tell identical corridors apart:
+  // least confirm_distance (straight line, in the new segment's odometry) from where the
+  // candidate was found must put the camera where the first one's map -> odom does before a
+  // relocalization edge joins the segment to the map (one that disagrees becomes the
+  // candidate). One view cannot tell identical corridors apart:
   // their doors and lights verify a pose metres off with 150+ inliers spread over the whole
   // image (docs/place_recognition.md), and a view half a metre on, still of doors and lights,
   // agrees with it. Further on the view holds what tells corridors apart (a poster, a notice
