@@ -28,6 +28,7 @@ namespace stereo_fabmap_slam {
 class StereoTrackerNodelet : public nodelet::Nodelet {
  public:
   ~StereoTrackerNodelet() override {
+    input_.reset();               // no image callback runs on after this (StereoImageInput)
     relocalize_service_.reset();  // before the stage its calls reach
     pairs_.Stop();
     if (worker_.joinable()) worker_.join();

@@ -53,6 +53,13 @@ MountedRig RigFromCameraInfo(const sensor_msgs::CameraInfo& left,
   return rig;
 }
 
+StereoImageInput::~StereoImageInput() {
+  left_.unsubscribe();
+  right_.unsubscribe();
+  left_info_.unsubscribe();
+  right_info_.unsubscribe();
+}
+
 StereoImageInput::StereoImageInput(ros::NodeHandle& node, const ros::NodeHandle& private_node,
                                    int queue_size, bool approximate, PairCallback on_pair,
                                    ImageCallback on_image)

@@ -59,6 +59,15 @@ class StereoImageInput {
   // transport). `on_pair` gets each synchronised pair, `on_image` each image of one side first.
   StereoImageInput(ros::NodeHandle& node, const ros::NodeHandle& private_node, int queue_size,
                    bool approximate, PairCallback on_pair, ImageCallback on_image);
+  // Unsubscribes first, which waits for an image callback in progress (roscpp removes a
+  // subscription's callbacks under their calling lock): members go in reverse order, the
+  // synchronisers before the subscribers that feed them, so a callback still running would
+  // reach a destroyed synchroniser and lock its destroyed mutex. (A launch that unloaded the
+  // StereoTracker ended once in "terminate called ... boost::lock_error", in the load rostest
+  // of a fresh-clone make test; the next run of the same code passed.)
+  ~StereoImageInput();
+  StereoImageInput(const StereoImageInput&) = delete;
+  StereoImageInput& operator=(const StereoImageInput&) = delete;
   // The camera_info of each image topic (left/camera_info beside left/image_raw: one remap of
   // the image moves both, as image_transport's CameraSubscriber does), paired by stamp.
   void SubscribeCameraInfo(ros::NodeHandle& node, int queue_size, InfoCallback on_info);
