@@ -25,18 +25,24 @@ SequenceScore::SequenceScore(SequenceScoreOptions options) : options_(options) {
 std::vector<double> SequenceScore::Push(const std::vector<double>& log_odds) {
   history_.push_back(log_odds);
   while (static_cast<int>(history_.size()) > options_.length) history_.pop_front();
-  return Score(history_);
+  std::vector<const std::vector<double>*> queries;
+  for (const std::vector<double>& query : history_) queries.push_back(&query);
+  return Score(queries);
 }
 
 std::vector<double> SequenceScore::Peek(const std::vector<double>& log_odds) const {
-  std::deque<std::vector<double>> history(history_);
-  history.push_back(log_odds);
-  while (static_cast<int>(history.size()) > options_.length) history.pop_front();
-  return Score(history);
+  // The newest length - 1 queries of the sequence, then this one: no copy of the history.
+  std::vector<const std::vector<double>*> queries;
+  const std::size_t kept = std::min(history_.size(), static_cast<std::size_t>(options_.length - 1));
+  for (std::size_t k = history_.size() - kept; k < history_.size(); ++k)
+    queries.push_back(&history_[k]);
+  queries.push_back(&log_odds);
+  return Score(queries);
 }
 
-std::vector<double> SequenceScore::Score(const std::deque<std::vector<double>>& history) const {
-  const std::vector<double>& log_odds = history.back();
+std::vector<double> SequenceScore::Score(
+    const std::vector<const std::vector<double>*>& queries) const {
+  const std::vector<double>& log_odds = *queries.back();
   // What a query adds to a chain at a place: its log odds there, or nothing if it had none.
   const auto evidence = [](const std::vector<double>& query, long place) {
     if (place < 0 || place >= static_cast<long>(query.size())) return 0.0;
@@ -48,7 +54,7 @@ std::vector<double> SequenceScore::Score(const std::deque<std::vector<double>>& 
   std::vector<double> best(static_cast<std::size_t>(places), 0.0);
   std::vector<double> next(best.size());
   const long step = options_.max_step;
-  for (std::size_t k = 0; k < history.size(); ++k) {
+  for (std::size_t k = 0; k < queries.size(); ++k) {
     for (long p = 0; p < places; ++p) {
       // A chain may start at any query: the earlier views may have shown new places, whose log
       // odds against a new place are 0 (Smith-Waterman's local alignment). So a revisit that
@@ -60,7 +66,7 @@ std::vector<double> SequenceScore::Score(const std::deque<std::vector<double>>& 
           previous = std::max(previous, best[static_cast<std::size_t>(q)]);
         }
       }
-      next[static_cast<std::size_t>(p)] = previous + evidence(history[k], p);
+      next[static_cast<std::size_t>(p)] = previous + evidence(*queries[k], p);
     }
     best.swap(next);
   }

@@ -122,35 +122,38 @@ void AddWords(const place_recognition::Vocabulary& vocabulary, const cv::Mat& de
   input->frames.word_sets.push_back(std::move(set));
 }
 
-// The stereo odometry alone (StereoSlam without loop closing) over every pair of the sequence:
-// where it put each pair's rectified left camera, and in which segment: every lost frame starts
-// the next, also one whose map the tracker kept (conservative: places of the two sides are then
-// never one). Only what the running system itself knows; ground truth stays for judging.
-std::vector<place_recognition::ViewPose> OdometryPoses(const datasets::EurocSequence& sequence,
-                                                       const camera::StereoRectifier& rectifier,
-                                                       const tools::SlamConfiguration& options) {
-  pipeline::StereoSlam slam(options.front_end, options.bundle_adjustment, rectifier,
-                            [] { return NowSeconds() * 1e3; });
-  std::vector<place_recognition::ViewPose> poses(sequence.size());
-  int segment = 0;
-  bool lost = false;
-  for (std::size_t i = 0; i < sequence.size(); ++i) {
-    const datasets::StereoImages images = sequence.LoadStereoPair(i);
+// The stereo odometry alone (StereoSlam without loop closing), fed every pair of the sequence
+// in order: where it put each pair's rectified left camera, and in which segment: every lost
+// frame starts the next, also one whose map the tracker kept (conservative: places of the two
+// sides are then never one). Only what the running system itself knows; ground truth stays for
+// judging.
+class OdometryFollower {
+ public:
+  OdometryFollower(const camera::StereoRectifier& rectifier,
+                   const tools::SlamConfiguration& options)
+      : slam_(options.front_end, options.bundle_adjustment, rectifier,
+              [] { return NowSeconds() * 1e3; }) {}
+
+  place_recognition::ViewPose Follow(const datasets::StereoImages& images) {
     const pipeline::FrameRecord* frame =
-        slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+        slam_.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right);
+    place_recognition::ViewPose pose;  // segment -1: no pose
     if (frame == nullptr || frame->state == odometry::TrackingState::kLost) {
-      lost = true;  // no pose: segment -1
-    } else {
-      if (lost) ++segment;
-      lost = false;
-      poses[i].segment = segment;
-      poses[i].T_world_camera = frame->T_world_camera;
+      lost_ = true;
+      return pose;
     }
-    if ((i + 1) % 500 == 0 || i + 1 == sequence.size())
-      std::fprintf(stderr, "odometry of %zu / %zu pairs\n", i + 1, sequence.size());
+    if (lost_) ++segment_;
+    lost_ = false;
+    pose.segment = segment_;
+    pose.T_world_camera = frame->T_world_camera;
+    return pose;
   }
-  return poses;
-}
+
+ private:
+  pipeline::StereoSlam slam_;
+  int segment_ = 0;
+  bool lost_ = false;
+};
 
 // A EuRoC-layout sequence: words of the rectified left image (what a keyframe carries), and
 // stereo points with the rectified left camera's ground-truth pose for the relevance test.
@@ -169,9 +172,9 @@ Input ReadSequence(const std::string& directory, int every,
   // Ground truth is the body's pose; the points are in the rectified left camera (T_WB T_BS).
   const evaluation::Trajectory truth = evaluation::TransformToSensorFrame(
       sequence.ground_truth(), rectifier.T_body_rectified_left());
-  const std::vector<place_recognition::ViewPose> odometry =
-      with_odometry ? OdometryPoses(sequence, rectifier, options)
-                    : std::vector<place_recognition::ViewPose>();
+  // Every pair goes to the odometry; every `every`-th is also a query (one read of each).
+  std::optional<OdometryFollower> odometry;
+  if (with_odometry) odometry.emplace(rectifier, options);
   features::StereoFeatureExtractor extractor(options.front_end.features, options.front_end.stereo,
                                              rectifier.camera());
   place_recognition::ImageDescriber describer(place_options.features);
@@ -183,8 +186,12 @@ Input ReadSequence(const std::string& directory, int every,
   const double start = sequence.frames().front().timestamp_ns * 1e-9;
   const std::size_t total = (sequence.size() + every - 1) / every;
   std::size_t without_truth = 0;
-  for (std::size_t i = 0; i < sequence.size(); i += static_cast<std::size_t>(every)) {
+  const std::size_t step = with_odometry ? 1 : static_cast<std::size_t>(every);
+  for (std::size_t i = 0; i < sequence.size(); i += step) {
     const datasets::StereoImages images = sequence.LoadStereoPair(i);
+    const place_recognition::ViewPose odometry_pose =
+        odometry ? odometry->Follow(images) : place_recognition::ViewPose();
+    if (i % static_cast<std::size_t>(every) != 0) continue;
     cv::Mat left, right;
     rectifier.Rectify(images.left, images.right, &left, &right);
     // Both in time order, as the odometry and the keyframes' describer see the stream (their
@@ -207,7 +214,7 @@ Input ReadSequence(const std::string& directory, int every,
     }
     points.push_back(std::move(with_depth));
     poses.push_back(pose);
-    if (with_odometry) input.frames.odometry_poses.push_back(odometry[i]);
+    if (odometry) input.frames.odometry_poses.push_back(odometry_pose);
     input.frames.times.push_back(images.timestamp_ns * 1e-9 - start);
     input.names.push_back(fs::path(sequence.frames()[i].left_path).filename().string());
     const std::size_t done = points.size() + without_truth;

@@ -43,8 +43,8 @@ class SequenceScore {
   void Reset() { history_.clear(); }
 
  private:
-  // The scores of the chains over `history` (oldest first) that end at its newest query.
-  std::vector<double> Score(const std::deque<std::vector<double>>& history) const;
+  // The scores of the chains over `queries` (oldest first) that end at the newest one.
+  std::vector<double> Score(const std::vector<const std::vector<double>*>& queries) const;
 
   SequenceScoreOptions options_;
   std::deque<std::vector<double>> history_;  // the last `length` queries' log odds, oldest first
