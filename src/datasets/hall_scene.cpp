@@ -185,22 +185,20 @@ float HallScene::Trace(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir
   return TraceRay(origin, direction, pixel_angle, obstacles, /*reflect=*/true);
 }
 
-float HallScene::TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
-                          float pixel_angle, const std::vector<int>* obstacles,
-                          bool reflect) const {
+HallScene::Hit HallScene::FirstHit(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+                                   const std::vector<int>* obstacles) const {
   const Eigen::Vector3f inverse = direction.cwiseInverse();
-  float best = std::numeric_limits<float>::infinity();
-  int best_box = -1, best_face = 0;
+  Hit hit;
   // The hall: where the ray leaves it.
   const Box& hall = boxes_[0];
   for (int axis = 0; axis < 3; ++axis) {
     if (direction[axis] == 0.0f) continue;
     const bool positive = direction[axis] > 0.0f;
     const float t = ((positive ? hall.max[axis] : hall.min[axis]) - origin[axis]) * inverse[axis];
-    if (t > 0.0f && t < best) {
-      best = t;
-      best_box = 0;
-      best_face = 2 * axis + (positive ? 1 : 0);
+    if (t > 0.0f && t < hit.distance) {
+      hit.distance = t;
+      hit.box = 0;
+      hit.face = 2 * axis + (positive ? 1 : 0);
     }
   }
   // Obstacles: where the ray enters them (slab test).
@@ -221,23 +219,35 @@ float HallScene::TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
       }
       far = std::min(far, t1);
     }
-    if (near <= far && near > 0.0f && near < best) {
-      best = near;
-      best_box = static_cast<int>(b);
-      best_face =
+    if (near <= far && near > 0.0f && near < hit.distance) {
+      hit.distance = near;
+      hit.box = static_cast<int>(b);
+      hit.face =
           2 * near_axis + (direction[near_axis] > 0.0f ? 0 : 1);  // entering through min or max
     }
   }
-  if (best_box < 0) return 0.0f;
-  const Eigen::Vector3f point = origin + best * direction;
-  const float cos_incidence = std::abs(direction[best_face / 2]);
-  const Material& material = boxes_[best_box].faces[best_face];
-  const float own = Shade(boxes_[best_box], best_face, point, best, cos_incidence, pixel_angle);
+  return hit;
+}
+
+float HallScene::Distance(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction) const {
+  return FirstHit(origin, direction, nullptr).distance;
+}
+
+float HallScene::TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+                          float pixel_angle, const std::vector<int>* obstacles,
+                          bool reflect) const {
+  const Hit hit = FirstHit(origin, direction, obstacles);
+  if (hit.box < 0) return 0.0f;
+  const Eigen::Vector3f point = origin + hit.distance * direction;
+  const float cos_incidence = std::abs(direction[hit.face / 2]);
+  const Material& material = boxes_[static_cast<std::size_t>(hit.box)].faces[hit.face];
+  const float own = Shade(boxes_[static_cast<std::size_t>(hit.box)], hit.face, point, hit.distance,
+                          cos_incidence, pixel_angle);
   if (!reflect || material.reflectance <= 0.0f) return own;
   // One bounce, against every obstacle (the cone's list holds for the primary rays only), with
   // a footprint four times wider: a waxed floor shows a blurred image, not a mirror's.
   Eigen::Vector3f mirrored = direction;
-  mirrored[best_face / 2] = -mirrored[best_face / 2];
+  mirrored[hit.face / 2] = -mirrored[hit.face / 2];
   const float reflected = TraceRay(point, mirrored, 4.0f * pixel_angle, nullptr, false);
   return (1.0f - material.reflectance) * own + material.reflectance * reflected;
 }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -59,11 +60,22 @@ class HallScene {
   std::vector<int> ObstaclesInCone(const Eigen::Vector3f& origin, const Eigen::Vector3f& axis,
                                    float half_angle) const;
 
+  // Distance [m] along the unit `direction` from `origin` to the first surface (the exact
+  // geometry, for measuring reconstructions); infinity if the ray leaves the hall.
+  float Distance(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction) const;
+
   const std::vector<Box>& boxes() const { return boxes_; }
   const std::vector<Texture>& textures() const { return textures_; }
   const HallOptions& options() const { return options_; }
 
  private:
+  struct Hit {
+    float distance = std::numeric_limits<float>::infinity();
+    int box = -1;  // into boxes_; -1: none
+    int face = 0;
+  };
+  Hit FirstHit(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+               const std::vector<int>* obstacles) const;
   void DeriveScales();  // fills Material::panels_per_metre_*
   float TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float pixel_angle,
                  const std::vector<int>* obstacles, bool reflect) const;

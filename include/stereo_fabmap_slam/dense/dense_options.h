@@ -1,0 +1,39 @@
+#pragma once
+
+#include "stereo_fabmap_slam/io/option_reader.h"
+
+namespace stereo_fabmap_slam::dense {
+
+// Dense depth from a rectified stereo pair (OpenCV's semi-global matching), kept only where it
+// is reliable: textured, consistent from left to right, not an isolated speckle, near enough.
+struct StereoDepthOptions {
+  static constexpr char kSection[] = "dense_depth";
+
+  // Disparities searched, a multiple of 16. 64 px at EuRoC's focal length (458 px) and
+  // baseline (0.11 m) reaches down to 0.79 m, nearer than the walls a walking or flying camera
+  // passes; more costs time in proportion.
+  int disparities = 64;
+  // Matching window [px], odd. 5 keeps edges sharp at 752 x 480; larger smooths more.
+  int block_size = 5;
+  // The best match's cost must beat the second best by this percentage (SGBM's uniqueness):
+  // repeated texture (tiles, doors) gives two near-equal minima.
+  int uniqueness = 10;
+  // Left-right consistency: the right image's disparity at the matched pixel may differ by at
+  // most this many pixels (SGBM's disp12MaxDiff); occlusions and mismatches fail it.
+  int left_right_max_difference = 1;
+  // Speckle filtering: connected regions of fewer pixels than this whose disparity varies by at
+  // most speckle_range px are removed (isolated blobs are mismatches, real surfaces are larger).
+  int speckle_window = 100;
+  int speckle_range = 2;
+  // Pixels whose window has a grey-level standard deviation below this carry no match: a blank
+  // wall's paint varies by about 3 levels under 2 levels of camera noise.
+  double min_texture = 4.0;
+  // Depth beyond this [m] is dropped: its error grows with the square of the distance (at
+  // 6 m a quarter pixel of disparity is 18 cm).
+  double max_depth = 6.0;
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;  // throws std::invalid_argument
+};
+
+}  // namespace stereo_fabmap_slam::dense

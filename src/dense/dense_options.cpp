@@ -1,0 +1,41 @@
+#include "stereo_fabmap_slam/dense/dense_options.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace stereo_fabmap_slam::dense {
+
+void StereoDepthOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("disparities", &disparities);
+  visitor.Visit("block_size", &block_size);
+  visitor.Visit("uniqueness", &uniqueness);
+  visitor.Visit("left_right_max_difference", &left_right_max_difference);
+  visitor.Visit("speckle_window", &speckle_window);
+  visitor.Visit("speckle_range", &speckle_range);
+  visitor.Visit("min_texture", &min_texture);
+  visitor.Visit("max_depth", &max_depth);
+}
+
+void StereoDepthOptions::Validate() const {
+  const std::string section = std::string(kSection) + ".";
+  if (disparities < 16 || disparities % 16 != 0) {
+    throw std::invalid_argument(section + "disparities must be a positive multiple of 16, got " +
+                                std::to_string(disparities));
+  }
+  if (block_size < 1 || block_size % 2 == 0) {
+    throw std::invalid_argument(section + "block_size must be odd and positive, got " +
+                                std::to_string(block_size));
+  }
+  if (uniqueness < 0 || left_right_max_difference < 0 || speckle_window < 0 || speckle_range < 0) {
+    throw std::invalid_argument(section +
+                                "uniqueness, left_right_max_difference, speckle_window and "
+                                "speckle_range must not be negative");
+  }
+  if (!(min_texture >= 0) || !std::isfinite(min_texture)) {
+    throw std::invalid_argument(section + "min_texture must be a finite number >= 0");
+  }
+  if (!(max_depth > 0)) throw std::invalid_argument(section + "max_depth must be > 0");
+}
+
+}  // namespace stereo_fabmap_slam::dense

@@ -1,0 +1,78 @@
+#include "stereo_fabmap_slam/dense/stereo_depth.h"
+
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+namespace stereo_fabmap_slam::dense {
+namespace {
+
+// Per pixel, the standard deviation of the grey levels in a size x size window.
+cv::Mat LocalDeviation(const cv::Mat& grey, int size) {
+  cv::Mat value, mean, mean_of_squares;
+  grey.convertTo(value, CV_32F);
+  const cv::Size window(size, size);
+  cv::boxFilter(value, mean, CV_32F, window);
+  cv::boxFilter(value.mul(value), mean_of_squares, CV_32F, window);
+  cv::Mat variance = mean_of_squares - mean.mul(mean);
+  cv::max(variance, 0.0, variance);  // rounding makes a flat window's variance slightly negative
+  cv::Mat deviation;
+  cv::sqrt(variance, deviation);
+  return deviation;
+}
+
+}  // namespace
+
+StereoDepth::StereoDepth(const StereoDepthOptions& options, const geometry::StereoCamera& camera)
+    : options_(options), camera_(camera) {
+  options_.Validate();
+  if (!(camera_.baseline > 0) || !(camera_.fx > 0)) {
+    throw std::invalid_argument(
+        "StereoDepth: the camera needs a positive baseline and focal length");
+  }
+  const int area = options_.block_size * options_.block_size;
+  // P1 and P2 as OpenCV's documentation suggests for one channel: the penalties for a change of
+  // disparity by one pixel (slanted surfaces) and by more (depth edges) between neighbours.
+  matcher_ =
+      cv::StereoSGBM::create(/*minDisparity=*/0, options_.disparities, options_.block_size,
+                             8 * area, 32 * area, options_.left_right_max_difference,
+                             /*preFilterCap=*/63, options_.uniqueness, options_.speckle_window,
+                             options_.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
+}
+
+cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const {
+  if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size() ||
+      left.size() != camera_.size) {
+    throw std::invalid_argument("StereoDepth: two 8-bit grey images of the camera's size expected");
+  }
+  cv::Mat fixed_point;  // CV_16S, 16 x disparity; negative where no match survived
+  matcher_->compute(left, right, fixed_point);
+  cv::Mat disparity;
+  fixed_point.convertTo(disparity, CV_32F, 1.0 / 16.0);
+  // No disparity where the left window is too flat to match, or the matcher found none.
+  const cv::Mat flat = LocalDeviation(left, options_.block_size) < options_.min_texture;
+  disparity.setTo(0.0f, flat | (disparity <= 0.0f));
+  return disparity;
+}
+
+cv::Mat StereoDepth::DepthFromDisparity(const cv::Mat& disparity) const {
+  cv::Mat depth(disparity.size(), CV_32F, cv::Scalar(0.0f));
+  const float focal_baseline = static_cast<float>(camera_.fx * camera_.baseline);
+  const float max_depth = static_cast<float>(options_.max_depth);
+  for (int v = 0; v < disparity.rows; ++v) {
+    const float* d = disparity.ptr<float>(v);
+    float* z = depth.ptr<float>(v);
+    for (int u = 0; u < disparity.cols; ++u) {
+      if (d[u] <= 0.0f) continue;
+      const float value = focal_baseline / d[u];
+      if (value <= max_depth) z[u] = value;
+    }
+  }
+  return depth;
+}
+
+cv::Mat StereoDepth::Depth(const cv::Mat& left, const cv::Mat& right) const {
+  return DepthFromDisparity(Disparity(left, right));
+}
+
+}  // namespace stereo_fabmap_slam::dense
