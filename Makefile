@@ -31,7 +31,7 @@ DEBIAN_PACKAGES := \
   libstd-srvs-dev \
   python3-sensor-msgs python3-geometry-msgs python3-nav-msgs python3-visualization-msgs \
   python3-std-srvs python3-tf2-msgs \
-  libceres-dev libopencv-dev libopencv-contrib-dev libeigen3-dev libyaml-cpp-dev \
+  libceres-dev libopencv-dev libopencv-contrib-dev libeigen3-dev libyaml-cpp-dev libopen3d-dev \
   googletest opencv-doc
 
 # The repository is a single catkin package, built standalone by CMake: build tree in

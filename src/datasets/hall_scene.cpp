@@ -233,6 +233,20 @@ float HallScene::Distance(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
   return FirstHit(origin, direction, nullptr).distance;
 }
 
+float HallScene::SurfaceDistance(const Eigen::Vector3f& point) const {
+  // Distance to a box's surface from inside it: to its nearest face; from outside: to the box.
+  const auto to_surface = [&point](const Box& box) {
+    const Eigen::Vector3f below = box.min - point, above = point - box.max;
+    const Eigen::Vector3f outside = below.cwiseMax(above).cwiseMax(0.0f);
+    if (outside.squaredNorm() > 0.0f) return outside.norm();
+    return (-below).cwiseMin(-above).minCoeff();
+  };
+  float nearest = to_surface(boxes_[0]);
+  for (std::size_t b = 1; b < boxes_.size(); ++b)
+    nearest = std::min(nearest, to_surface(boxes_[b]));
+  return nearest;
+}
+
 float HallScene::TraceRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
                           float pixel_angle, const std::vector<int>* obstacles,
                           bool reflect) const {

@@ -39,3 +39,23 @@ void StereoDepthOptions::Validate() const {
 }
 
 }  // namespace stereo_fabmap_slam::dense
+
+namespace stereo_fabmap_slam::dense {
+
+void FusionOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("voxel_size", &voxel_size);
+  visitor.Visit("truncation", &truncation);
+  visitor.Visit("block_resolution", &block_resolution);
+}
+
+void FusionOptions::Validate() const {
+  const std::string section = std::string(kSection) + ".";
+  if (!(voxel_size > 0) || !std::isfinite(voxel_size))
+    throw std::invalid_argument(section + "voxel_size must be a finite number > 0");
+  if (!(truncation >= voxel_size) || !std::isfinite(truncation))
+    throw std::invalid_argument(section + "truncation must be at least one voxel");
+  if (block_resolution < 2)
+    throw std::invalid_argument(section + "block_resolution must be at least 2");
+}
+
+}  // namespace stereo_fabmap_slam::dense

@@ -33,6 +33,10 @@ StereoDepth::StereoDepth(const StereoDepthOptions& options, const geometry::Ster
   const int area = options_.block_size * options_.block_size;
   // P1 and P2 as OpenCV's documentation suggests for one channel: the penalties for a change of
   // disparity by one pixel (slanted surfaces) and by more (depth edges) between neighbours.
+  // Three-way SGBM: 23 ms a 752 x 480 pair on this machine, against 53 ms for five directions
+  // and 80 ms for four-path HH4, which is less biased on the hall's floor seen at a grazing
+  // angle (median disparity error -0.17 px with 3-way, 0.00 with HH4; elsewhere 0.03 both):
+  // the budget is 40 ms a keyframe for depth and fusion together.
   matcher_ =
       cv::StereoSGBM::create(/*minDisparity=*/0, options_.disparities, options_.block_size,
                              8 * area, 32 * area, options_.left_right_max_difference,

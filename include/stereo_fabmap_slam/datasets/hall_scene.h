@@ -63,6 +63,9 @@ class HallScene {
   // Distance [m] along the unit `direction` from `origin` to the first surface (the exact
   // geometry, for measuring reconstructions); infinity if the ray leaves the hall.
   float Distance(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction) const;
+  // Distance [m] from a point to the nearest surface of the scene (walls, floor, ceiling,
+  // obstacles): how far a reconstructed point lies from the exact geometry.
+  float SurfaceDistance(const Eigen::Vector3f& point) const;
 
   const std::vector<Box>& boxes() const { return boxes_; }
   const std::vector<Texture>& textures() const { return textures_; }
