@@ -38,10 +38,6 @@ void StereoDepthOptions::Validate() const {
   if (!(max_depth > 0)) throw std::invalid_argument(section + "max_depth must be > 0");
 }
 
-}  // namespace stereo_fabmap_slam::dense
-
-namespace stereo_fabmap_slam::dense {
-
 void FusionOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("voxel_size", &voxel_size);
   visitor.Visit("truncation", &truncation);

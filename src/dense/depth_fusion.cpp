@@ -1,8 +1,8 @@
 #include "stereo_fabmap_slam/dense/depth_fusion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <stdexcept>
 #include <unordered_set>
 #include <utility>

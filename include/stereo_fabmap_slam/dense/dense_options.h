@@ -36,10 +36,6 @@ struct StereoDepthOptions {
   void Validate() const;  // throws std::invalid_argument
 };
 
-}  // namespace stereo_fabmap_slam::dense
-
-namespace stereo_fabmap_slam::dense {
-
 // Truncated signed distance fusion of keyframe depth (Open3D's scalable volume: blocks of
 // voxels allocated where surfaces are, so memory grows with the surface, not the space).
 struct FusionOptions {
