@@ -19,6 +19,9 @@
 #include "command_line.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/dense/depth_fusion.h"
+#include "stereo_fabmap_slam/dense/ply_files.h"
+#include "stereo_fabmap_slam/dense/stereo_depth.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
@@ -30,7 +33,7 @@ using namespace stereo_fabmap_slam;  // NOLINT: a tool's main file
 constexpr char kUsage[] =
     "usage: run_dataset ASL_DIR [--config FILE] [--fabmap-config FILE] [--no-loop-closing]\n"
     "                   [--load-map FILE] [--mode mapping|localization] [--save-map FILE]\n"
-    "                   [--every N] [--output DIR] [--quiet]\n"
+    "                   [--every N] [--output DIR] [--dense] [--quiet]\n"
     "Runs the stereo SLAM on an EuRoC sequence and writes to DIR (default output/<name>):\n"
     "  trajectory.txt  TUM, rectified left camera in the map frame (after loop closing), every "
     "frame\n"
@@ -39,6 +42,8 @@ constexpr char kUsage[] =
     "  loops.csv       every verified loop candidate, accepted or not, with the reason\n"
     "  timing.csv      milliseconds per frame and stage\n"
     "  summary.json    counts, times, and ATE against ground truth when the sequence has it\n"
+    "  mesh.ply, dense_cloud.ply  with --dense: every keyframe's stereo depth fused at its final\n"
+    "                  map pose (sections dense_depth, dense_fusion of the config), grey levels\n"
     "--load-map starts from a map saved by --save-map (same vocabulary and camera); with\n"
     "--mode localization it is used without being extended: the camera is relocalized in it at\n"
     "start, after every loss and at each keyframe, and trajectory.txt is in the map's frame.\n"
@@ -77,6 +82,50 @@ double PeakResidentMegabytes() {
   return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
 }
 
+// The dense map: after the run, every keyframe's pair read again, its depth fused at the
+// keyframe's final pose (after loop closing: offline, nothing needs taking out again).
+void WriteDenseMap(const datasets::EurocSequence& sequence,
+                   const camera::StereoRectifier& rectifier,
+                   const tools::SlamConfiguration& options, const io::Trajectory& keyframes,
+                   const std::string& output, pipeline::JsonObject* summary) {
+  const dense::StereoDepth stereo(options.dense_depth, rectifier.camera());
+  dense::DepthFusion fusion(options.dense_fusion, rectifier.camera());
+  std::vector<double> depth_ms, fusion_ms;
+  std::size_t next = 0;  // keyframes and pairs are both in time order
+  for (const io::StampedPose& keyframe : keyframes) {
+    const auto stamp_ns = static_cast<std::int64_t>(std::llround(keyframe.timestamp * 1e9));
+    while (next < sequence.size() &&
+           sequence.frames()[next].timestamp_ns < stamp_ns - 1'000'000)  // 1 ms
+      ++next;
+    if (next == sequence.size()) break;
+    if (std::llabs(sequence.frames()[next].timestamp_ns - stamp_ns) > 1'000'000) continue;
+    const datasets::StereoImages images = sequence.LoadStereoPair(next);
+    cv::Mat left, right;
+    rectifier.Rectify(images.left, images.right, &left, &right);
+    const double start = NowMs();
+    const cv::Mat depth = stereo.Depth(left, right);
+    const double depth_done = NowMs();
+    fusion.Integrate(left, depth, keyframe.pose);
+    depth_ms.push_back(depth_done - start);
+    fusion_ms.push_back(NowMs() - depth_done);
+  }
+  const dense::Mesh mesh = fusion.ExtractMesh();
+  dense::WriteMeshPly(mesh, output + "/mesh.ply");
+  dense::WriteCloudPly(fusion.ExtractCloud(), output + "/dense_cloud.ply");
+  const auto median = [](std::vector<double> values) {
+    if (values.empty()) return 0.0;
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  summary->Add("dense_keyframes", depth_ms.size());
+  summary->Add("dense_depth_ms_median", median(depth_ms), 3);
+  summary->Add("dense_fusion_ms_median", median(fusion_ms), 3);
+  summary->Add("dense_mesh_vertices", mesh.vertices.size());
+  summary->Add("dense_mesh_triangles", mesh.triangles.size());
+  summary->Add("dense_blocks", fusion.blocks());
+  summary->Add("dense_memory_mb", fusion.memory_bytes() / 1048576.0, 1);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -86,7 +135,7 @@ int main(int argc, char** argv) {
     args.emplace(argc, argv,
                  std::set<std::string>{"config", "fabmap-config", "output", "load-map", "save-map",
                                        "mode", "every"},
-                 std::set<std::string>{"quiet", "help", "no-loop-closing"});
+                 std::set<std::string>{"quiet", "help", "no-loop-closing", "dense"});
     if (args->Flag("help")) {
       std::fputs(kUsage, stdout);
       return 0;
@@ -217,6 +266,9 @@ int main(int argc, char** argv) {
     summary.Add("realtime_factor", duration / (processing_ms / 1000.0));
     summary.Add("peak_rss_mb", PeakResidentMegabytes(), 1);
     slam.record().Write(output, slam.map_state(), &summary);
+    if (args->Flag("dense")) {
+      WriteDenseMap(sequence, rectifier, options, slam.KeyframeTrajectory(), output, &summary);
+    }
     // Ground truth is the body frame: move it to the rectified left camera we estimate. The ATE
     // needs 3 poses matched to it; with fewer (a sequence of one or two frames, a map that never
     // found the camera, ground truth that does not cover the images) the outputs are written all

@@ -6,6 +6,7 @@
 #include "stereo_fabmap_slam/backend/backend_options.h"
 #include "stereo_fabmap_slam/camera/camera_options.h"
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/dense/dense_options.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 #include "stereo_fabmap_slam/place_recognition/place_recognition_options.h"
@@ -22,6 +23,8 @@ struct SlamConfiguration {
   place_recognition::LoopDetectorOptions loop_detection;
   backend::PoseGraphOptions pose_graph;
   relocalization::RelocalizerOptions relocalization;
+  dense::StereoDepthOptions dense_depth;
+  dense::FusionOptions dense_fusion;
 
   template <typename Visit>
   void ForEachModule(Visit visit) {
@@ -31,6 +34,8 @@ struct SlamConfiguration {
     visit(loop_detection);
     visit(pose_graph);
     visit(relocalization);
+    visit(dense_depth);
+    visit(dense_fusion);
   }
 
   // Reads and validates every section; unknown sections and keys, and bad values, throw

@@ -7,6 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/datasets/euroc_sequence.h"
+#include "stereo_fabmap_slam/dense/dense_options.h"
+#include "stereo_fabmap_slam/dense/ply_files.h"
 #include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "test_support.h"
 
@@ -172,6 +176,57 @@ TEST(RunDataset, Mh01MapSavedLoadedAndUsedForLocalization) {
                        &output),
             1);
   EXPECT_NE(output.find("checksum"), std::string::npos) << output;
+}
+
+TEST(RunDataset, Mh01DenseMapIsWrittenWhereTheKeyframesLooked) {
+  const std::string asl = EurocSequencePath("MH01_first10s");
+  TemporaryDirectory temp;
+  std::string output;
+  ASSERT_EQ(RunCommand(std::string(RUN_DATASET_BIN) + " " + asl + " --quiet --dense --output " +
+                           temp.path() + " 2>&1",
+                       &output),
+            0)
+      << output;
+  const std::string summary = ReadTextFile(temp.path() + "/summary.json");
+  RecordProperty("summary", summary);
+  EXPECT_EQ(JsonNumber(summary, "dense_keyframes"), JsonNumber(summary, "map_keyframes"));
+  const dense::Mesh mesh = dense::ReadMeshPly(temp.path() + "/mesh.ply");
+  const dense::Cloud cloud = dense::ReadCloudPly(temp.path() + "/dense_cloud.ply");
+  EXPECT_EQ(static_cast<double>(mesh.vertices.size()), JsonNumber(summary, "dense_mesh_vertices"));
+  EXPECT_EQ(static_cast<double>(mesh.triangles.size()),
+            JsonNumber(summary, "dense_mesh_triangles"));
+  // A room a camera flew through for 10 s: tens of thousands of vertices at least (measured
+  // 366,377 with 26 keyframes).
+  EXPECT_GT(mesh.vertices.size(), 20000u);
+  EXPECT_GT(cloud.points.size(), 20000u);
+  EXPECT_EQ(mesh.grey.size(), mesh.vertices.size());
+
+  // Every vertex is where some keyframe looked: in front of it, inside its image, no farther
+  // than the depth limit plus the truncation band. A pose inverted or in the wrong frame puts
+  // the surface behind the cameras or off their images.
+  const datasets::EurocSequence sequence = datasets::EurocSequence::Open(asl);
+  const geometry::StereoCamera camera =
+      camera::StereoRectifier::FromCalibration(sequence.calibration()).camera();
+  const io::Trajectory keyframes = io::ReadTumTrajectory(temp.path() + "/keyframes.txt");
+  const dense::StereoDepthOptions depth_options;
+  const dense::FusionOptions fusion_options;
+  // Along the ray at the image's corner, depth max_depth is ~1.4 times as far.
+  const double reach = 1.5 * depth_options.max_depth + fusion_options.truncation;
+  std::size_t seen = 0;
+  for (const Eigen::Vector3d& vertex : mesh.vertices) {
+    for (const io::StampedPose& keyframe : keyframes) {
+      const Eigen::Vector3d p = keyframe.pose.inverse() * vertex;
+      if (p.z() <= 0 || p.norm() > reach) continue;
+      const double u = camera.fx * p.x() / p.z() + camera.cx;
+      const double v = camera.fy * p.y() / p.z() + camera.cy;
+      // Half a voxel's projection beyond the border: a voxel centre may lie just outside.
+      if (u > -2 && v > -2 && u < camera.size.width + 1 && v < camera.size.height + 1) {
+        ++seen;
+        break;
+      }
+    }
+  }
+  EXPECT_GT(static_cast<double>(seen), 0.999 * static_cast<double>(mesh.vertices.size()));
 }
 
 TEST(RunDataset, BadArguments) {
