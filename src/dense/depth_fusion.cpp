@@ -12,6 +12,7 @@
 #include <open3d/pipelines/integration/ScalableTSDFVolume.h>
 #include <open3d/pipelines/integration/UniformTSDFVolume.h>
 #include <open3d/utility/Helper.h>
+#include <opencv2/core/utility.hpp>
 
 namespace stereo_fabmap_slam::dense {
 
@@ -42,8 +43,8 @@ void DepthFusion::Deintegrate(const cv::Mat& grey, const cv::Mat& depth,
 std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
     const cv::Mat& depth, const Eigen::Isometry3d& T_world_camera) const {
   // Every block the truncation band around a measured surface point passes through: the
-  // segment from truncation in front of the point to truncation behind it, along the ray. A
-  // block is 16 voxels (32 cm), the band 8 cm: the segment's two ends name every block it meets.
+  // segment from truncation in front of the point to truncation behind it, along the ray; every
+  // block it meets lies in the box its two ends span.
   // Every second pixel: at 2 px the samples lie under 2 cm apart on a surface 4 m away.
   constexpr int kStride = 2;
   const double unit = volume_->volume_unit_length_;
@@ -80,7 +81,9 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
   const Eigen::Vector3d t = T_camera_world.translation();
   const double unit = volume_->volume_unit_length_;
   const int resolution = volume_->volume_unit_resolution_;
-  const double voxel = options_.voxel_size;
+  // The blocks first, here (the map of blocks is not thread-safe), then their voxels in
+  // parallel: each voxel is updated once per view, so the result does not depend on the order.
+  std::vector<UniformTSDFVolume*> blocks;
   for (const Eigen::Vector3i& index : BlocksNearSurface(depth, T_world_camera)) {
     auto found = volume_->volume_units_.find(index);
     if (found == volume_->volume_units_.end()) {
@@ -92,49 +95,60 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
           open3d::pipelines::integration::TSDFVolumeColorType::Gray32, index.cast<double>() * unit);
       found = volume_->volume_units_.emplace(index, created).first;
     }
-    UniformTSDFVolume& block = *found->second.volume_;
-    const Eigen::Vector3d origin = block.origin_;
-    for (int x = 0; x < resolution; ++x) {
-      for (int y = 0; y < resolution; ++y) {
-        // The column of voxels along z, in the camera frame: start and step.
-        const Eigen::Vector3d start =
-            R * (origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, 0.5)) + t;
-        const Eigen::Vector3d step = R.col(2) * voxel;
-        for (int z = 0; z < resolution; ++z) {
-          const Eigen::Vector3d p = start + z * step;
-          if (p.z() <= 1e-3) continue;
-          const int u = static_cast<int>(std::lround(camera_.fx * p.x() / p.z() + camera_.cx));
-          const int v = static_cast<int>(std::lround(camera_.fy * p.y() / p.z() + camera_.cy));
-          if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) continue;
-          const double measured = depth.at<float>(v, u);
-          if (!(measured > 0.0)) continue;
-          // Signed distance along the ray (Open3D's convention), positive in front of the
-          // surface; truncated; nothing behind the band (unseen).
-          const double distance =
-              (measured - p.z()) *
-              std::sqrt(1.0 + (p.x() * p.x() + p.y() * p.y()) / (p.z() * p.z()));
-          if (distance < -options_.truncation) continue;
-          const double tsdf = std::min(1.0, distance / options_.truncation);
-          // Inverse variance: stereo depth's error grows with the square of the depth, its
-          // variance with the fourth power (1 at 1 m).
-          const double weight = sign / (measured * measured * measured * measured);
-          open3d::geometry::TSDFVoxel& cell =
-              block.voxels_[static_cast<std::size_t>(block.IndexOf(x, y, z))];
-          const double total = cell.weight_ + weight;
-          // All of it taken out again: the stored weight is a float, so what is left is
-          // rounding, not an observation (relative to the weight taken out).
-          if (total <= 1e-4 * std::abs(weight)) {
-            cell.tsdf_ = 0.0f;
-            cell.weight_ = 0.0f;
-            cell.color_.setZero();
-            continue;
-          }
-          const double g = grey.at<std::uint8_t>(v, u) / 255.0;
-          cell.tsdf_ = static_cast<float>((cell.tsdf_ * cell.weight_ + tsdf * weight) / total);
-          cell.color_ =
-              (cell.color_ * cell.weight_ + Eigen::Vector3d::Constant(g) * weight) / total;
-          cell.weight_ = static_cast<float>(total);
+    blocks.push_back(found->second.volume_.get());
+  }
+  cv::parallel_for_(cv::Range(0, static_cast<int>(blocks.size())), [&](const cv::Range& range) {
+    for (int b = range.start; b < range.end; ++b) {
+      UpdateBlock(grey, depth, R, t, sign, blocks[static_cast<std::size_t>(b)]);
+    }
+  });
+}
+
+void DepthFusion::UpdateBlock(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Matrix3d& R,
+                              const Eigen::Vector3d& t, double sign,
+                              open3d::pipelines::integration::UniformTSDFVolume* volume) const {
+  open3d::pipelines::integration::UniformTSDFVolume& block = *volume;
+  const int resolution = block.resolution_;
+  const double voxel = options_.voxel_size;
+  const Eigen::Vector3d origin = block.origin_;
+  for (int x = 0; x < resolution; ++x) {
+    for (int y = 0; y < resolution; ++y) {
+      // The column of voxels along z, in the camera frame: start and step.
+      const Eigen::Vector3d start =
+          R * (origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, 0.5)) + t;
+      const Eigen::Vector3d step = R.col(2) * voxel;
+      for (int z = 0; z < resolution; ++z) {
+        const Eigen::Vector3d p = start + z * step;
+        if (p.z() <= 1e-3) continue;
+        const int u = static_cast<int>(std::lround(camera_.fx * p.x() / p.z() + camera_.cx));
+        const int v = static_cast<int>(std::lround(camera_.fy * p.y() / p.z() + camera_.cy));
+        if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) continue;
+        const double measured = depth.at<float>(v, u);
+        if (!(measured > 0.0)) continue;
+        // Signed distance along the ray (Open3D's convention), positive in front of the
+        // surface; truncated; nothing behind the band (unseen).
+        const double distance =
+            (measured - p.z()) * std::sqrt(1.0 + (p.x() * p.x() + p.y() * p.y()) / (p.z() * p.z()));
+        if (distance < -options_.truncation) continue;
+        const double tsdf = std::min(1.0, distance / options_.truncation);
+        // Inverse variance: stereo depth's error grows with the square of the depth, its
+        // variance with the fourth power (1 at 1 m).
+        const double weight = sign / (measured * measured * measured * measured);
+        open3d::geometry::TSDFVoxel& cell =
+            block.voxels_[static_cast<std::size_t>(block.IndexOf(x, y, z))];
+        const double total = cell.weight_ + weight;
+        // All of it taken out again: the stored weight is a float, so what is left is
+        // rounding, not an observation (relative to the weight taken out).
+        if (total <= 1e-4 * std::abs(weight)) {
+          cell.tsdf_ = 0.0f;
+          cell.weight_ = 0.0f;
+          cell.color_.setZero();
+          continue;
         }
+        const double g = grey.at<std::uint8_t>(v, u) / 255.0;
+        cell.tsdf_ = static_cast<float>((cell.tsdf_ * cell.weight_ + tsdf * weight) / total);
+        cell.color_ = (cell.color_ * cell.weight_ + Eigen::Vector3d::Constant(g) * weight) / total;
+        cell.weight_ = static_cast<float>(total);
       }
     }
   }

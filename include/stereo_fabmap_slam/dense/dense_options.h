@@ -47,8 +47,10 @@ struct FusionOptions {
   // Truncation [m] of the signed distance, as voxels: 4 voxels span the depth noise up to about
   // 4 m (a quarter pixel there is 8 cm) without surfaces behind each other merging.
   double truncation = 0.08;
-  // Voxels along a block's edge (Open3D's volume unit): 16 x 2 cm = 32 cm blocks.
-  int block_resolution = 16;
+  // Voxels along a block's edge (Open3D's volume unit): 8 x 2 cm = 16 cm blocks, which the
+  // band (8 cm either side of a surface) fills. Against 16 (32 cm) on MH01_first10s: fusion
+  // 46.5 -> 28.4 ms a keyframe, volume 950 -> 584 MB; exact depth gives the same surface.
+  int block_resolution = 8;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument

@@ -12,6 +12,7 @@
 
 namespace open3d::pipelines::integration {
 class ScalableTSDFVolume;
+class UniformTSDFVolume;
 }  // namespace open3d::pipelines::integration
 
 namespace stereo_fabmap_slam::dense {
@@ -65,6 +66,10 @@ class DepthFusion {
                                                  const Eigen::Isometry3d& T_world_camera) const;
   void Fuse(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Isometry3d& T_world_camera,
             double sign);
+  // One block's voxels updated by one view (`R`, `t`: world to camera; `sign` -1 takes out).
+  void UpdateBlock(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Matrix3d& R,
+                   const Eigen::Vector3d& t, double sign,
+                   open3d::pipelines::integration::UniformTSDFVolume* block) const;
 
   FusionOptions options_;
   geometry::StereoCamera camera_;
