@@ -3,6 +3,8 @@
 // (EuRoC's rig with its lens distortion, 2 grey levels of noise) and rectified as the SLAM does.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
