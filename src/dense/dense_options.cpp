@@ -42,6 +42,8 @@ void FusionOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("voxel_size", &voxel_size);
   visitor.Visit("truncation", &truncation);
   visitor.Visit("block_resolution", &block_resolution);
+  visitor.Visit("disparity_noise", &disparity_noise);
+  visitor.Visit("max_surface_sigma", &max_surface_sigma);
 }
 
 void FusionOptions::Validate() const {
@@ -52,6 +54,10 @@ void FusionOptions::Validate() const {
     throw std::invalid_argument(section + "truncation must be at least one voxel");
   if (block_resolution < 2)
     throw std::invalid_argument(section + "block_resolution must be at least 2");
+  if (!(disparity_noise > 0) || !std::isfinite(disparity_noise))
+    throw std::invalid_argument(section + "disparity_noise must be a finite number > 0");
+  if (!(max_surface_sigma > 0) || !std::isfinite(max_surface_sigma))
+    throw std::invalid_argument(section + "max_surface_sigma must be a finite number > 0");
 }
 
 }  // namespace stereo_fabmap_slam::dense

@@ -4,17 +4,57 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 #include <unordered_set>
 #include <utility>
 
-#include <open3d/geometry/PointCloud.h>
-#include <open3d/geometry/TriangleMesh.h>
-#include <open3d/pipelines/integration/ScalableTSDFVolume.h>
-#include <open3d/pipelines/integration/UniformTSDFVolume.h>
+#include <open3d/core/Tensor.h>
+#include <open3d/core/hashmap/HashMap.h>
+#include <open3d/t/geometry/PointCloud.h>
+#include <open3d/t/geometry/TriangleMesh.h>
+#include <open3d/t/geometry/VoxelBlockGrid.h>
 #include <open3d/utility/Helper.h>
 #include <opencv2/core/utility.hpp>
 
 namespace stereo_fabmap_slam::dense {
+namespace {
+
+namespace o3c = open3d::core;
+
+// Blocks the grid is created for; the hash map grows (rehashes) beyond it.
+constexpr std::int64_t kInitialBlocks = 4096;
+// Bytes a voxel keeps: signed distance and weight (32-bit floats), grey level (8 bits).
+constexpr std::size_t kBytesPerVoxel = sizeof(float) + sizeof(float) + sizeof(std::uint8_t);
+
+o3c::Tensor BlockKeys(const std::vector<Eigen::Vector3i>& blocks) {
+  std::vector<int> flat;
+  flat.reserve(3 * blocks.size());
+  for (const Eigen::Vector3i& block : blocks) flat.insert(flat.end(), {block.x(), block.y(), block.z()});
+  return o3c::Tensor(flat, {static_cast<std::int64_t>(blocks.size()), 3}, o3c::Int32);
+}
+
+}  // namespace
+
+struct DepthFusion::Volume {
+  Volume(double voxel_size, int resolution)
+      : grid({"tsdf", "weight", "grey"}, {o3c::Float32, o3c::Float32, o3c::UInt8},
+             {{1}, {1}, {1}}, static_cast<float>(voxel_size), resolution, kInitialBlocks) {}
+
+  // The grid's hash map shares its storage with the grid (rehashing included).
+  o3c::HashMap map() { return grid.GetHashMap(); }
+
+  open3d::t::geometry::VoxelBlockGrid grid;
+};
+
+struct DepthFusion::ViewData {
+  const cv::Mat& grey;
+  const cv::Mat& depth;
+  Eigen::Matrix3d R;  // world to camera
+  Eigen::Vector3d t;
+  float* tsdf;
+  float* weight;
+  std::uint8_t* grey_levels;
+};
 
 DepthFusion::DepthFusion(const FusionOptions& options, const geometry::StereoCamera& camera)
     : options_(options), camera_(camera) {
@@ -25,9 +65,7 @@ DepthFusion::DepthFusion(const FusionOptions& options, const geometry::StereoCam
 DepthFusion::~DepthFusion() = default;
 
 void DepthFusion::Reset() {
-  volume_ = std::make_unique<open3d::pipelines::integration::ScalableTSDFVolume>(
-      options_.voxel_size, options_.truncation,
-      open3d::pipelines::integration::TSDFVolumeColorType::Gray32, options_.block_resolution);
+  volume_ = std::make_unique<Volume>(options_.voxel_size, options_.block_resolution);
 }
 
 void DepthFusion::Integrate(const cv::Mat& grey, const cv::Mat& depth,
@@ -40,6 +78,11 @@ void DepthFusion::Deintegrate(const cv::Mat& grey, const cv::Mat& depth,
   Fuse(grey, depth, T_world_camera, -1.0);
 }
 
+double DepthFusion::Weight(double depth) const {
+  const double sigma = options_.disparity_noise * depth * depth / (camera_.fx * camera_.baseline);
+  return 1.0 / (sigma * sigma);
+}
+
 std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
     const cv::Mat& depth, const Eigen::Isometry3d& T_world_camera) const {
   // Every block the truncation band around a measured surface point passes through: the
@@ -47,7 +90,7 @@ std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
   // block it meets lies in the box its two ends span.
   // Every second pixel: at 2 px the samples lie under 2 cm apart on a surface 4 m away.
   constexpr int kStride = 2;
-  const double unit = volume_->volume_unit_length_;
+  const double unit = options_.voxel_size * options_.block_resolution;
   std::unordered_set<Eigen::Vector3i, open3d::utility::hash_eigen<Eigen::Vector3i>> blocks;
   for (int v = 0; v < depth.rows; v += kStride) {
     const float* row = depth.ptr<float>(v);
@@ -75,116 +118,232 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
     throw std::invalid_argument(
         "DepthFusion: an 8-bit grey image and a float depth image of the camera's size expected");
   }
-  using open3d::pipelines::integration::UniformTSDFVolume;
-  const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
-  const Eigen::Matrix3d R = T_camera_world.linear();
-  const Eigen::Vector3d t = T_camera_world.translation();
-  const double unit = volume_->volume_unit_length_;
-  const int resolution = volume_->volume_unit_resolution_;
-  // The blocks first, here (the map of blocks is not thread-safe), then their voxels in
-  // parallel: each voxel is updated once per view, so the result does not depend on the order.
-  std::vector<UniformTSDFVolume*> blocks;
-  for (const Eigen::Vector3i& index : BlocksNearSurface(depth, T_world_camera)) {
-    auto found = volume_->volume_units_.find(index);
-    if (found == volume_->volume_units_.end()) {
-      if (sign < 0) continue;  // nothing of this view was there
-      open3d::pipelines::integration::ScalableTSDFVolume::VolumeUnit created;
-      created.index_ = index;
-      created.volume_ = std::make_shared<UniformTSDFVolume>(
-          unit, resolution, options_.truncation,
-          open3d::pipelines::integration::TSDFVolumeColorType::Gray32, index.cast<double>() * unit);
-      found = volume_->volume_units_.emplace(index, created).first;
+  const int resolution = options_.block_resolution;
+  const std::int64_t voxels_per_block = static_cast<std::int64_t>(resolution) * resolution * resolution;
+  o3c::HashMap map = volume_->map();
+  const std::vector<Eigen::Vector3i> near_surface = BlocksNearSurface(depth, T_world_camera);
+  if (sign > 0 && !near_surface.empty()) {
+    // New blocks start empty (Open3D leaves a new block's values as they were in memory).
+    o3c::Tensor buffer_indices, created;
+    map.Activate(BlockKeys(near_surface), buffer_indices, created);
+    const int* index = buffer_indices.GetDataPtr<int>();
+    const bool* is_new = created.GetDataPtr<bool>();
+    std::vector<o3c::Tensor> values = map.GetValueTensors();
+    for (std::size_t i = 0; i < near_surface.size(); ++i) {
+      if (!is_new[i]) continue;
+      const std::int64_t first = static_cast<std::int64_t>(index[i]) * voxels_per_block;
+      std::fill_n(values[0].GetDataPtr<float>() + first, voxels_per_block, 0.0f);
+      std::fill_n(values[1].GetDataPtr<float>() + first, voxels_per_block, 0.0f);
+      std::fill_n(values[2].GetDataPtr<std::uint8_t>() + first, voxels_per_block, 0);
     }
-    blocks.push_back(found->second.volume_.get());
   }
-  cv::parallel_for_(cv::Range(0, static_cast<int>(blocks.size())), [&](const cv::Range& range) {
+  // Every allocated block the view can see: the blocks around its surfaces, and the ones in
+  // front of them, which its free space updates (a block's centre in the image and nearer than
+  // the farthest depth, with a block's half diagonal of margin).
+  const o3c::Tensor active = map.GetActiveIndices();
+  const o3c::Tensor keys = map.GetKeyTensor();
+  const int* active_index = active.GetDataPtr<int>();
+  const int* key = keys.GetDataPtr<int>();
+  double farthest = 0;
+  cv::minMaxLoc(depth, nullptr, &farthest);
+  const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
+  const double unit = options_.voxel_size * resolution;
+  const double half_diagonal = 0.5 * std::sqrt(3.0) * unit;
+  std::vector<std::pair<Eigen::Vector3i, int>> visible;
+  for (std::int64_t i = 0; i < active.GetLength(); ++i) {
+    const int buffer_index = active_index[i];
+    const Eigen::Vector3i block(key[3 * buffer_index], key[3 * buffer_index + 1],
+                                key[3 * buffer_index + 2]);
+    const Eigen::Vector3d centre = T_camera_world * ((block.cast<double>().array() + 0.5) * unit).matrix();
+    if (centre.z() <= -half_diagonal || centre.z() > farthest + options_.truncation + half_diagonal)
+      continue;
+    const double margin = half_diagonal / std::max(centre.z(), half_diagonal);
+    const double x = centre.x() / std::max(centre.z(), 1e-6), y = centre.y() / std::max(centre.z(), 1e-6);
+    const double x_min = -camera_.cx / camera_.fx, x_max = (camera_.size.width - camera_.cx) / camera_.fx;
+    const double y_min = -camera_.cy / camera_.fy, y_max = (camera_.size.height - camera_.cy) / camera_.fy;
+    if (centre.z() > half_diagonal &&
+        (x < x_min - margin || x > x_max + margin || y < y_min - margin || y > y_max + margin))
+      continue;
+    visible.emplace_back(block, buffer_index);
+  }
+  std::vector<o3c::Tensor> values = map.GetValueTensors();
+  const ViewData view{grey,
+                      depth,
+                      T_camera_world.linear(),
+                      T_camera_world.translation(),
+                      values[0].GetDataPtr<float>(),
+                      values[1].GetDataPtr<float>(),
+                      values[2].GetDataPtr<std::uint8_t>()};
+  // Each voxel is updated once per view, so the blocks can be updated in parallel and the result
+  // does not depend on the order.
+  cv::parallel_for_(cv::Range(0, static_cast<int>(visible.size())), [&](const cv::Range& range) {
     for (int b = range.start; b < range.end; ++b) {
-      UpdateBlock(grey, depth, R, t, sign, blocks[static_cast<std::size_t>(b)]);
+      const auto& [block, buffer_index] = visible[static_cast<std::size_t>(b)];
+      UpdateBlock(view, block, buffer_index, sign);
     }
   });
 }
 
-void DepthFusion::UpdateBlock(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Matrix3d& R,
-                              const Eigen::Vector3d& t, double sign,
-                              open3d::pipelines::integration::UniformTSDFVolume* volume) const {
-  open3d::pipelines::integration::UniformTSDFVolume& block = *volume;
-  const int resolution = block.resolution_;
+void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block,
+                              int buffer_index, double sign) const {
+  const int resolution = options_.block_resolution;
   const double voxel = options_.voxel_size;
-  const Eigen::Vector3d origin = block.origin_;
-  for (int x = 0; x < resolution; ++x) {
+  const std::size_t first = static_cast<std::size_t>(buffer_index) * resolution * resolution * resolution;
+  // Open3D's voxel (x, y, z) of block k lies at (k * resolution + (x, y, z)) * voxel_size, and
+  // its index within the block is x + resolution * (y + resolution * z).
+  const Eigen::Vector3d origin = block.cast<double>() * resolution * voxel;
+  const Eigen::Vector3d step = view.R.col(0) * voxel;
+  for (int z = 0; z < resolution; ++z) {
     for (int y = 0; y < resolution; ++y) {
-      // The column of voxels along z, in the camera frame: start and step.
-      const Eigen::Vector3d start =
-          R * (origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, 0.5)) + t;
-      const Eigen::Vector3d step = R.col(2) * voxel;
-      for (int z = 0; z < resolution; ++z) {
-        const Eigen::Vector3d p = start + z * step;
+      // The row of voxels along x, in the camera frame: start and step.
+      const Eigen::Vector3d start = view.R * (origin + voxel * Eigen::Vector3d(0, y, z)) + view.t;
+      for (int x = 0; x < resolution; ++x) {
+        const Eigen::Vector3d p = start + x * step;
         if (p.z() <= 1e-3) continue;
         const int u = static_cast<int>(std::lround(camera_.fx * p.x() / p.z() + camera_.cx));
         const int v = static_cast<int>(std::lround(camera_.fy * p.y() / p.z() + camera_.cy));
-        if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) continue;
-        const double measured = depth.at<float>(v, u);
+        if (u < 0 || v < 0 || u >= view.depth.cols || v >= view.depth.rows) continue;
+        const double measured = view.depth.at<float>(v, u);
         if (!(measured > 0.0)) continue;
-        // Signed distance along the ray (Open3D's convention), positive in front of the
-        // surface; truncated; nothing behind the band (unseen).
+        // Signed distance along the ray, positive in front of the surface; truncated; nothing
+        // behind the band (unseen).
         const double distance =
             (measured - p.z()) * std::sqrt(1.0 + (p.x() * p.x() + p.y() * p.y()) / (p.z() * p.z()));
         if (distance < -options_.truncation) continue;
         const double tsdf = std::min(1.0, distance / options_.truncation);
-        // Inverse variance: stereo depth's error grows with the square of the depth, its
-        // variance with the fourth power (1 at 1 m).
-        const double weight = sign / (measured * measured * measured * measured);
-        open3d::geometry::TSDFVoxel& cell =
-            block.voxels_[static_cast<std::size_t>(block.IndexOf(x, y, z))];
-        const double total = cell.weight_ + weight;
+        const double weight = sign * Weight(measured);
+        const std::size_t cell = first + static_cast<std::size_t>(x + resolution * (y + resolution * z));
+        float& stored_tsdf = view.tsdf[cell];
+        float& stored_weight = view.weight[cell];
+        std::uint8_t& stored_grey = view.grey_levels[cell];
+        const double total = stored_weight + weight;
         // All of it taken out again: the stored weight is a float, so what is left is
         // rounding, not an observation (relative to the weight taken out).
         if (total <= 1e-4 * std::abs(weight)) {
-          cell.tsdf_ = 0.0f;
-          cell.weight_ = 0.0f;
-          cell.color_.setZero();
+          stored_tsdf = 0.0f;
+          stored_weight = 0.0f;
+          stored_grey = 0;
           continue;
         }
-        const double g = grey.at<std::uint8_t>(v, u) / 255.0;
-        cell.tsdf_ = static_cast<float>((cell.tsdf_ * cell.weight_ + tsdf * weight) / total);
-        cell.color_ = (cell.color_ * cell.weight_ + Eigen::Vector3d::Constant(g) * weight) / total;
-        cell.weight_ = static_cast<float>(total);
+        const double g = view.grey.at<std::uint8_t>(v, u);
+        stored_tsdf = static_cast<float>((stored_tsdf * stored_weight + tsdf * weight) / total);
+        stored_grey = static_cast<std::uint8_t>(
+            std::clamp(std::lround((stored_grey * stored_weight + g * weight) / total), 0L, 255L));
+        stored_weight = static_cast<float>(total);
       }
     }
   }
 }
 
-Mesh DepthFusion::ExtractMesh() const {
-  const std::shared_ptr<open3d::geometry::TriangleMesh> extracted = volume_->ExtractTriangleMesh();
+namespace {
+
+// Eigen copies of an Open3D (N, 3) tensor's rows, whatever its element type.
+template <typename Scalar, typename Vector>
+std::vector<Vector> Rows(const o3c::Tensor& tensor) {
+  const o3c::Tensor converted = tensor.To(o3c::Dtype::FromType<Scalar>()).Contiguous();
+  const Scalar* data = converted.GetDataPtr<Scalar>();
+  std::vector<Vector> rows(static_cast<std::size_t>(tensor.GetLength()));
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    rows[i] = Vector(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+  return rows;
+}
+
+}  // namespace
+
+std::vector<float> DepthFusion::GreyAt(const std::vector<Eigen::Vector3d>& points) const {
+  // The grey level of the voxel nearest each point (0-1).
+  const int resolution = options_.block_resolution;
+  std::vector<Eigen::Vector3i> blocks, voxels;
+  blocks.reserve(points.size());
+  voxels.reserve(points.size());
+  for (const Eigen::Vector3d& point : points) {
+    const Eigen::Vector3i voxel = (point / options_.voxel_size).array().round().cast<int>();
+    const Eigen::Vector3i block =
+        (voxel.cast<double>() / resolution).array().floor().cast<int>();
+    blocks.push_back(block);
+    voxels.push_back(voxel - block * resolution);
+  }
+  std::vector<float> grey(points.size(), 0.0f);
+  if (points.empty()) return grey;
+  o3c::HashMap map = volume_->map();
+  o3c::Tensor buffer_indices, found;
+  map.Find(BlockKeys(blocks), buffer_indices, found);
+  const int* index = buffer_indices.GetDataPtr<int>();
+  const bool* is_found = found.GetDataPtr<bool>();
+  const std::uint8_t* levels = map.GetValueTensors()[2].GetDataPtr<std::uint8_t>();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!is_found[i]) continue;
+    const Eigen::Vector3i& v = voxels[i];
+    const std::size_t cell = static_cast<std::size_t>(index[i]) * resolution * resolution * resolution +
+                             static_cast<std::size_t>(v.x() + resolution * (v.y() + resolution * v.z()));
+    grey[i] = levels[cell] / 255.0f;
+  }
+  return grey;
+}
+
+namespace {
+
+// The summed inverse variance a voxel needs for its distance's standard deviation to be at most
+// `max_sigma`.
+float WeightThreshold(double max_sigma) { return static_cast<float>(1.0 / (max_sigma * max_sigma)); }
+
+}  // namespace
+
+namespace {
+
+// Open3D 0.16 throws from its extraction when the surface is empty (it sets an empty colour
+// tensor on the result); that case is an empty surface here, anything else stays an error.
+template <typename Extraction>
+auto EmptyIfNoSurface(Extraction extract) -> decltype(extract()) {
+  try {
+    return extract();
+  } catch (const std::runtime_error& error) {
+    if (std::string(error.what()).find("Colors") == std::string::npos) throw;
+    return {};
+  }
+}
+
+}  // namespace
+
+Mesh DepthFusion::ExtractMesh() const { return ExtractMesh(options_.max_surface_sigma); }
+
+Cloud DepthFusion::ExtractCloud() const { return ExtractCloud(options_.max_surface_sigma); }
+
+Mesh DepthFusion::ExtractMesh(double max_surface_sigma) const {
   Mesh mesh;
-  mesh.vertices = std::move(extracted->vertices_);
-  mesh.triangles = std::move(extracted->triangles_);
-  mesh.grey.reserve(extracted->vertex_colors_.size());
-  // Gray32 volumes give every colour channel the grey level.
-  for (const Eigen::Vector3d& colour : extracted->vertex_colors_)
-    mesh.grey.push_back(static_cast<float>(colour.x()));
+  if (volume_->map().Size() == 0) return mesh;
+  const open3d::t::geometry::TriangleMesh extracted = EmptyIfNoSurface(
+      [&] { return volume_->grid.ExtractTriangleMesh(WeightThreshold(max_surface_sigma)); });
+  if (!extracted.HasVertexPositions() || extracted.GetVertexPositions().GetLength() == 0) return mesh;
+  mesh.vertices = Rows<double, Eigen::Vector3d>(extracted.GetVertexPositions());
+  if (extracted.HasTriangleIndices())
+    mesh.triangles = Rows<int, Eigen::Vector3i>(extracted.GetTriangleIndices());
+  mesh.grey = GreyAt(mesh.vertices);
   return mesh;
 }
 
-Cloud DepthFusion::ExtractCloud() const {
-  const std::shared_ptr<open3d::geometry::PointCloud> extracted = volume_->ExtractPointCloud();
+Cloud DepthFusion::ExtractCloud(double max_surface_sigma) const {
   Cloud cloud;
-  cloud.points = std::move(extracted->points_);
-  cloud.normals = std::move(extracted->normals_);
-  cloud.grey.reserve(extracted->colors_.size());
-  for (const Eigen::Vector3d& colour : extracted->colors_)
-    cloud.grey.push_back(static_cast<float>(colour.x()));
+  if (volume_->map().Size() == 0) return cloud;
+  const open3d::t::geometry::PointCloud extracted =
+      EmptyIfNoSurface([&] { return volume_->grid.ExtractPointCloud(WeightThreshold(max_surface_sigma)); });
+  if (!extracted.HasPointPositions() || extracted.GetPointPositions().GetLength() == 0) return cloud;
+  cloud.points = Rows<double, Eigen::Vector3d>(extracted.GetPointPositions());
+  if (extracted.HasPointNormals())
+    cloud.normals = Rows<double, Eigen::Vector3d>(extracted.GetPointNormals());
+  cloud.grey = GreyAt(cloud.points);
   return cloud;
 }
 
-std::size_t DepthFusion::blocks() const { return volume_->volume_units_.size(); }
+std::size_t DepthFusion::blocks() const { return static_cast<std::size_t>(volume_->map().Size()); }
 
 std::size_t DepthFusion::memory_bytes() const {
-  // Open3D keeps every voxel of an allocated block: its grid index, colour (doubles), signed
-  // distance and weight.
+  // The hash map keeps room for its capacity's blocks (it doubles when full), each with every
+  // voxel's distance, weight and grey level, and its key.
   const std::size_t voxels_per_block = static_cast<std::size_t>(options_.block_resolution) *
                                        options_.block_resolution * options_.block_resolution;
-  return blocks() * voxels_per_block * sizeof(open3d::geometry::TSDFVoxel);
+  return static_cast<std::size_t>(volume_->map().GetCapacity()) *
+         (voxels_per_block * kBytesPerVoxel + 3 * sizeof(int));
 }
 
 }  // namespace stereo_fabmap_slam::dense

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <tuple>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -192,7 +194,8 @@ TEST_F(StereoDepthOnTheHall, FusedExactDepthGivesAMeshOnTheExactGeometry) {
   // The fusion and the meshing alone, on exact depth at exact poses: every vertex must lie on
   // the surface to within the interpolation of a plane between voxel centres (exact for a
   // plane; a quarter voxel, 5 mm, leaves room for the hall's edges and corners).
-  const FusionOptions options;
+  FusionOptions options;
+  options.max_surface_sigma = 1e3;  // exact depth: every measurement is certain
   DepthFusion fusion(options, rectifier_->camera());
   for (double t = 0.0; t < 8.0; t += 2.0) {
     const RenderedPair pair = Render(t);
@@ -211,10 +214,86 @@ TEST_F(StereoDepthOnTheHall, FusedExactDepthGivesAMeshOnTheExactGeometry) {
   EXPECT_EQ(cloud.normals.size(), cloud.points.size());
 }
 
+// Fraction of `points` with a mesh vertex within `radius`: the vertices binned in cells of the
+// radius, so only a point's own and the 26 neighbouring cells can hold one.
+double FractionCovered(const std::vector<Eigen::Vector3d>& points, const Mesh& mesh, double radius) {
+  struct CellHash {
+    std::size_t operator()(const Eigen::Vector3i& c) const {
+      return static_cast<std::size_t>(c.x()) * 73856093u ^ static_cast<std::size_t>(c.y()) * 19349663u ^
+             static_cast<std::size_t>(c.z()) * 83492791u;
+    }
+  };
+  const auto cell_of = [radius](const Eigen::Vector3d& p) -> Eigen::Vector3i {
+    return (p / radius).array().floor().template cast<int>();
+  };
+  std::unordered_map<Eigen::Vector3i, std::vector<Eigen::Vector3d>, CellHash> cells;
+  for (const Eigen::Vector3d& vertex : mesh.vertices) cells[cell_of(vertex)].push_back(vertex);
+  std::size_t covered = 0;
+  for (const Eigen::Vector3d& point : points) {
+    const Eigen::Vector3i cell = cell_of(point);
+    bool found = false;
+    for (int n = 0; n < 27 && !found; ++n) {
+      const auto bin = cells.find(cell + Eigen::Vector3i(n % 3 - 1, n / 3 % 3 - 1, n / 9 - 1));
+      if (bin == cells.end()) continue;
+      for (const Eigen::Vector3d& vertex : bin->second) found = found || (vertex - point).norm() < radius;
+    }
+    covered += found ? 1 : 0;
+  }
+  return points.empty() ? 0.0 : static_cast<double>(covered) / static_cast<double>(points.size());
+}
+
+TEST_F(StereoDepthOnTheHall, FusedStereoDepthOfALapIsAccurateWhereItIsCertain) {
+  // A lap of the loop route, a keyframe a second, its stereo depth fused at the exact poses.
+  const datasets::Route route(datasets::RouteKind::kLoop, scene_->options());
+  const StereoDepthOptions depth_options;
+  const StereoDepth stereo(depth_options, rectifier_->camera());
+  const FusionOptions options;
+  DepthFusion fusion(options, rectifier_->camera());
+  const geometry::StereoCamera& camera = rectifier_->camera();
+  // The exact surface behind every 8th pixel that got a depth: what the lap measured.
+  std::vector<Eigen::Vector3d> measured;
+  for (double t = 0.0; t < route.lap_time(); t += 1.0) {
+    const RenderedPair pair = Render(t);
+    const cv::Mat depth = stereo.Depth(pair.left, pair.right);
+    fusion.Integrate(pair.left, depth, RectifiedLeftPose(t));
+    for (int v = 0; v < camera.size.height; v += 8) {
+      for (int u = 0; u < camera.size.width; u += 8) {
+        const double z = pair.exact_depth.at<float>(v, u);
+        if (!(depth.at<float>(v, u) > 0.0f) || !(z > 0)) continue;
+        measured.push_back(RectifiedLeftPose(t) * Eigen::Vector3d((u - camera.cx) / camera.fx * z,
+                                                                  (v - camera.cy) / camera.fy * z, z));
+      }
+    }
+  }
+  const auto report = [&](const char* what, const Mesh& mesh) {
+    const auto [median, p90] = MeshDistances(mesh, *scene_);
+    const double complete = FractionCovered(measured, mesh, 0.05);
+    std::printf("%s: %zu vertices: median %.4f m, 90 %% %.4f m from the surface; %.3f of the "
+                "measured surface within 5 cm\n",
+                what, mesh.vertices.size(), median, p90, complete);
+    return std::make_tuple(median, p90, complete);
+  };
+  std::printf("%zu blocks, %.0f MB\n", fusion.blocks(), fusion.memory_bytes() / 1e6);
+  // Everything the views put in the volume covers what they measured (measured 0.91: the rest
+  // are single far measurements that nearer views' free space overrules).
+  const auto [all_median, all_p90, all_complete] = report("unfiltered", fusion.ExtractMesh(1e3));
+  EXPECT_GT(all_complete, 0.85);
+  // Where the fused distance's standard deviation is at most 3 cm, the vertices' errors are those
+  // of a normal distribution of that deviation or less: median 0.67 sigma = 2 cm, 90th
+  // percentile 1.64 sigma = 5 cm (measured 1.2 / 3.5 cm), which is issue 33's accuracy target.
+  const auto [median, p90, complete] = report("sigma <= 3 cm", fusion.ExtractMesh(0.03));
+  EXPECT_GT(complete, 0.0);
+  EXPECT_LT(median, 0.67 * 0.03);
+  EXPECT_LT(p90, 1.64 * 0.03);
+  // The default keeps what the volume knows to within its band (measured 2.3 / 7.6 cm, 0.54).
+  report("default", fusion.ExtractMesh());
+}
+
 TEST_F(StereoDepthOnTheHall, ReintegrationAtTheCorrectedPoseLeavesOneWall) {
   // A view integrated at a pose 15 cm off (as before a loop closed) puts a second wall beside
   // the first; taking it out at that pose and putting it back at the corrected one leaves one.
-  const FusionOptions options;
+  FusionOptions options;
+  options.max_surface_sigma = 1e3;  // exact depth: every measurement is certain
   DepthFusion fusion(options, rectifier_->camera());
   const RenderedPair first = Render(2.0), second = Render(3.0);
   const cv::Mat first_depth = ExactDepthWithin(first, 4.0);
@@ -237,7 +316,8 @@ TEST_F(StereoDepthOnTheHall, ReintegrationAtTheCorrectedPoseLeavesOneWall) {
 }
 
 TEST_F(StereoDepthOnTheHall, DeintegratingEveryViewEmptiesTheVolume) {
-  const FusionOptions options;
+  FusionOptions options;
+  options.max_surface_sigma = 1e3;  // exact depth: every measurement is certain
   DepthFusion fusion(options, rectifier_->camera());
   const RenderedPair pair = Render(5.0);
   const cv::Mat depth = ExactDepthWithin(pair, 4.0);

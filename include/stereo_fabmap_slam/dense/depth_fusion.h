@@ -10,11 +10,6 @@
 #include "stereo_fabmap_slam/dense/dense_options.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 
-namespace open3d::pipelines::integration {
-class ScalableTSDFVolume;
-class UniformTSDFVolume;
-}  // namespace open3d::pipelines::integration
-
 namespace stereo_fabmap_slam::dense {
 
 // A surface taken out of the volume, in the world frame of the poses, with the fused grey level
@@ -31,9 +26,9 @@ struct Cloud {
 };
 
 // Depth images of the rectified left camera fused into one truncated signed distance volume
-// (Open3D's ScalableTSDFVolume, grey levels as colour), and the surface taken out of it as a
-// triangle mesh or a point cloud. Open3D stays behind this class: its headers and compile
-// definitions do not reach the code that uses it. Not thread-safe.
+// (Open3D's voxel block grid: a hash map of blocks, allocated where surfaces are), and the
+// surface taken out of it as a triangle mesh or a point cloud. Open3D stays behind this class:
+// its headers and compile definitions do not reach the code that uses it. Not thread-safe.
 class DepthFusion {
  public:
   // Throws std::invalid_argument for invalid options.
@@ -44,9 +39,12 @@ class DepthFusion {
 
   // `grey`: the rectified left image (8-bit); `depth`: metres along the optical axis (CV_32F,
   // 0 where unknown), both of the camera's size; `T_world_camera`: where the camera was.
-  // Each measurement weighs by its inverse variance (1 / depth^4: stereo's depth error grows
-  // with the square of the depth). Open3D's own integration weighs every pixel alike, so the
-  // update is written here, into Open3D's blocks, whose marching cubes make the mesh.
+  // Each measurement weighs by its inverse variance (stereo's depth error grows with the square
+  // of the depth), and every allocated block the view sees is updated, also far in front of
+  // this view's surfaces (free space clears what noisier views put there). Open3D's own
+  // integration weighs every pixel alike and touches only the blocks around the view's
+  // surfaces, so the update is written here, into Open3D's blocks, whose marching cubes make
+  // the mesh.
   void Integrate(const cv::Mat& grey, const cv::Mat& depth,
                  const Eigen::Isometry3d& T_world_camera);
   // Takes a view integrated before out again (the same images and pose): what a keyframe whose
@@ -55,25 +53,34 @@ class DepthFusion {
                    const Eigen::Isometry3d& T_world_camera);
   void Reset();
 
+  // Only where the fused distance is known well enough (FusionOptions::max_surface_sigma, or
+  // the standard deviation [m] given).
   Mesh ExtractMesh() const;    // marching cubes over the allocated blocks
   Cloud ExtractCloud() const;  // the zero crossings of the signed distance, with normals
+  Mesh ExtractMesh(double max_surface_sigma) const;
+  Cloud ExtractCloud(double max_surface_sigma) const;
   // Blocks of voxels allocated so far, and their memory [bytes]: what grows with the surface.
   std::size_t blocks() const;
   std::size_t memory_bytes() const;
 
  private:
+  struct Volume;    // Open3D's grid
+  struct ViewData;  // one view's images and pose, as the block update reads them
+
   std::vector<Eigen::Vector3i> BlocksNearSurface(const cv::Mat& depth,
                                                  const Eigen::Isometry3d& T_world_camera) const;
   void Fuse(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Isometry3d& T_world_camera,
             double sign);
-  // One block's voxels updated by one view (`R`, `t`: world to camera; `sign` -1 takes out).
-  void UpdateBlock(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Matrix3d& R,
-                   const Eigen::Vector3d& t, double sign,
-                   open3d::pipelines::integration::UniformTSDFVolume* block) const;
+  // One block's voxels updated by one view (`sign` -1 takes it out).
+  void UpdateBlock(const ViewData& view, const Eigen::Vector3i& block, int buffer_index,
+                   double sign) const;
+  // The inverse variance of a depth measurement [1/m^2].
+  double Weight(double depth) const;
+  std::vector<float> GreyAt(const std::vector<Eigen::Vector3d>& points) const;
 
   FusionOptions options_;
   geometry::StereoCamera camera_;
-  std::unique_ptr<open3d::pipelines::integration::ScalableTSDFVolume> volume_;
+  std::unique_ptr<Volume> volume_;
 };
 
 }  // namespace stereo_fabmap_slam::dense
