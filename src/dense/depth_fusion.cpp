@@ -57,8 +57,14 @@ struct DepthFusion::ViewData {
 };
 
 DepthFusion::DepthFusion(const FusionOptions& options, const geometry::StereoCamera& camera)
-    : options_(options), camera_(camera) {
+    : options_(options), camera_(camera), ray_length_(camera.size, CV_32F) {
   options_.Validate();
+  for (int v = 0; v < camera_.size.height; ++v) {
+    for (int u = 0; u < camera_.size.width; ++u) {
+      const double x = (u - camera_.cx) / camera_.fx, y = (v - camera_.cy) / camera_.fy;
+      ray_length_.at<float>(v, u) = static_cast<float>(std::sqrt(1.0 + x * x + y * y));
+    }
+  }
   Reset();
 }
 
@@ -137,35 +143,11 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
       std::fill_n(values[2].GetDataPtr<std::uint8_t>() + first, voxels_per_block, 0);
     }
   }
-  // Every allocated block the view can see: the blocks around its surfaces, and the ones in
-  // front of them, which its free space updates (a block's centre in the image and nearer than
-  // the farthest depth, with a block's half diagonal of margin).
-  const o3c::Tensor active = map.GetActiveIndices();
-  const o3c::Tensor keys = map.GetKeyTensor();
-  const int* active_index = active.GetDataPtr<int>();
-  const int* key = keys.GetDataPtr<int>();
-  double farthest = 0;
-  cv::minMaxLoc(depth, nullptr, &farthest);
+  // Every allocated block the view sees: the blocks around its surfaces, and the ones in front
+  // of them, whose voxels its free space updates.
   const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
-  const double unit = options_.voxel_size * resolution;
-  const double half_diagonal = 0.5 * std::sqrt(3.0) * unit;
-  std::vector<std::pair<Eigen::Vector3i, int>> visible;
-  for (std::int64_t i = 0; i < active.GetLength(); ++i) {
-    const int buffer_index = active_index[i];
-    const Eigen::Vector3i block(key[3 * buffer_index], key[3 * buffer_index + 1],
-                                key[3 * buffer_index + 2]);
-    const Eigen::Vector3d centre = T_camera_world * ((block.cast<double>().array() + 0.5) * unit).matrix();
-    if (centre.z() <= -half_diagonal || centre.z() > farthest + options_.truncation + half_diagonal)
-      continue;
-    const double margin = half_diagonal / std::max(centre.z(), half_diagonal);
-    const double x = centre.x() / std::max(centre.z(), 1e-6), y = centre.y() / std::max(centre.z(), 1e-6);
-    const double x_min = -camera_.cx / camera_.fx, x_max = (camera_.size.width - camera_.cx) / camera_.fx;
-    const double y_min = -camera_.cy / camera_.fy, y_max = (camera_.size.height - camera_.cy) / camera_.fy;
-    if (centre.z() > half_diagonal &&
-        (x < x_min - margin || x > x_max + margin || y < y_min - margin || y > y_max + margin))
-      continue;
-    visible.emplace_back(block, buffer_index);
-  }
+  const std::vector<std::pair<Eigen::Vector3i, int>> visible =
+      VisibleBlocks(map, depth, T_camera_world);
   std::vector<o3c::Tensor> values = map.GetValueTensors();
   const ViewData view{grey,
                       depth,
@@ -184,6 +166,56 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
   });
 }
 
+std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
+    open3d::core::HashMap& map, const cv::Mat& depth, const Eigen::Isometry3d& T_camera_world) const {
+  // The farthest measured depth in every tile of kTile x kTile pixels (0 where none): a block is
+  // updated only if some pixel of its image footprint measured a surface no nearer than the
+  // block's front minus the band. Blocks behind every measurement or where nothing was measured
+  // are left as they are (on MH01_first10s most of the blocks in the view's frustum).
+  constexpr int kTile = 16;
+  const int tiles_x = (depth.cols + kTile - 1) / kTile, tiles_y = (depth.rows + kTile - 1) / kTile;
+  cv::Mat farthest(tiles_y, tiles_x, CV_32F, cv::Scalar(0.0f));
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* row = depth.ptr<float>(v);
+    float* tile_row = farthest.ptr<float>(v / kTile);
+    for (int u = 0; u < depth.cols; ++u) tile_row[u / kTile] = std::max(tile_row[u / kTile], row[u]);
+  }
+  const o3c::Tensor active = map.GetActiveIndices();
+  const o3c::Tensor keys = map.GetKeyTensor();
+  const int* active_index = active.GetDataPtr<int>();
+  const int* key = keys.GetDataPtr<int>();
+  const double unit = options_.voxel_size * options_.block_resolution;
+  const double half_diagonal = 0.5 * std::sqrt(3.0) * unit;
+  std::vector<std::pair<Eigen::Vector3i, int>> visible;
+  for (std::int64_t i = 0; i < active.GetLength(); ++i) {
+    const int buffer_index = active_index[i];
+    const Eigen::Vector3i block(key[3 * buffer_index], key[3 * buffer_index + 1],
+                                key[3 * buffer_index + 2]);
+    const Eigen::Vector3d centre =
+        T_camera_world * ((block.cast<double>().array() + 0.5) * unit).matrix();
+    const double front = centre.z() - half_diagonal;
+    if (centre.z() + half_diagonal <= 0) continue;  // behind the camera
+    if (front > 1e-3) {
+      // The block's footprint: its bounding sphere's image, a square around the centre's pixel.
+      const double radius = std::max(camera_.fx, camera_.fy) * half_diagonal / front;
+      const double u = camera_.fx * centre.x() / centre.z() + camera_.cx;
+      const double v = camera_.fy * centre.y() / centre.z() + camera_.cy;
+      const int u0 = std::max(0, static_cast<int>(std::floor(u - radius))) / kTile;
+      const int u1 = std::min(depth.cols - 1, static_cast<int>(std::ceil(u + radius))) / kTile;
+      const int v0 = std::max(0, static_cast<int>(std::floor(v - radius))) / kTile;
+      const int v1 = std::min(depth.rows - 1, static_cast<int>(std::ceil(v + radius))) / kTile;
+      if (u + radius < 0 || v + radius < 0 || u - radius >= depth.cols || v - radius >= depth.rows)
+        continue;  // outside the image
+      float deepest = 0.0f;
+      for (int ty = v0; ty <= v1; ++ty)
+        for (int tx = u0; tx <= u1; ++tx) deepest = std::max(deepest, farthest.at<float>(ty, tx));
+      if (front > deepest + options_.truncation) continue;  // nothing measured, or all in front
+    }
+    visible.emplace_back(block, buffer_index);
+  }
+  return visible;
+}
+
 void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block,
                               int buffer_index, double sign) const {
   const int resolution = options_.block_resolution;
@@ -200,15 +232,19 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
       for (int x = 0; x < resolution; ++x) {
         const Eigen::Vector3d p = start + x * step;
         if (p.z() <= 1e-3) continue;
-        const int u = static_cast<int>(std::lround(camera_.fx * p.x() / p.z() + camera_.cx));
-        const int v = static_cast<int>(std::lround(camera_.fy * p.y() / p.z() + camera_.cy));
-        if (u < 0 || v < 0 || u >= view.depth.cols || v >= view.depth.rows) continue;
-        const double measured = view.depth.at<float>(v, u);
+        const double inverse_z = 1.0 / p.z();
+        // Nearest pixel (floor of +0.5; the range check first keeps the cast defined).
+        const double u_real = camera_.fx * p.x() * inverse_z + camera_.cx + 0.5;
+        const double v_real = camera_.fy * p.y() * inverse_z + camera_.cy + 0.5;
+        if (!(u_real >= 0.0 && v_real >= 0.0 && u_real < view.depth.cols && v_real < view.depth.rows))
+          continue;
+        const int u = static_cast<int>(u_real), v = static_cast<int>(v_real);
+        const double measured = view.depth.ptr<float>(v)[u];
         if (!(measured > 0.0)) continue;
         // Signed distance along the ray, positive in front of the surface; truncated; nothing
-        // behind the band (unseen).
-        const double distance =
-            (measured - p.z()) * std::sqrt(1.0 + (p.x() * p.x() + p.y() * p.y()) / (p.z() * p.z()));
+        // behind the band (unseen). Depth to distance along the pixel's ray: its length per
+        // unit depth.
+        const double distance = (measured - p.z()) * ray_length_.ptr<float>(v)[u];
         if (distance < -options_.truncation) continue;
         const double tsdf = std::min(1.0, distance / options_.truncation);
         const double weight = sign * Weight(measured);
@@ -225,7 +261,7 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
           stored_grey = 0;
           continue;
         }
-        const double g = view.grey.at<std::uint8_t>(v, u);
+        const double g = view.grey.ptr<std::uint8_t>(v)[u];
         stored_tsdf = static_cast<float>((stored_tsdf * stored_weight + tsdf * weight) / total);
         stored_grey = static_cast<std::uint8_t>(
             std::clamp(std::lround((stored_grey * stored_weight + g * weight) / total), 0L, 255L));

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -9,6 +10,10 @@
 
 #include "stereo_fabmap_slam/dense/dense_options.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
+
+namespace open3d::core {
+class HashMap;
+}  // namespace open3d::core
 
 namespace stereo_fabmap_slam::dense {
 
@@ -69,6 +74,10 @@ class DepthFusion {
 
   std::vector<Eigen::Vector3i> BlocksNearSurface(const cv::Mat& depth,
                                                  const Eigen::Isometry3d& T_world_camera) const;
+  // The allocated blocks (and their place in the grid's buffers) whose voxels a view updates.
+  std::vector<std::pair<Eigen::Vector3i, int>> VisibleBlocks(
+      open3d::core::HashMap& map, const cv::Mat& depth,
+      const Eigen::Isometry3d& T_camera_world) const;
   void Fuse(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Isometry3d& T_world_camera,
             double sign);
   // One block's voxels updated by one view (`sign` -1 takes it out).
@@ -80,6 +89,7 @@ class DepthFusion {
 
   FusionOptions options_;
   geometry::StereoCamera camera_;
+  cv::Mat ray_length_;  // CV_32F: each pixel's ray length per unit of depth
   std::unique_ptr<Volume> volume_;
 };
 
