@@ -348,8 +348,26 @@ Cloud DepthFusion::ExtractCloud() const { return ExtractCloud(options_.max_surfa
 Mesh DepthFusion::ExtractMesh(double max_surface_sigma) const {
   Mesh mesh;
   if (volume_->map().Size() == 0) return mesh;
-  const open3d::t::geometry::TriangleMesh extracted = EmptyIfNoSurface(
-      [&] { return volume_->grid.ExtractTriangleMesh(WeightThreshold(max_surface_sigma)); });
+  // Open3D 0.16's marching cubes asserts that the far end of a vertex's edge has a linear index
+  // above 0, but the first voxel of the block in buffer 0 has index 0 (and an assertion in
+  // Debian's build aborts the process: it did in the DenseMapper on MH01). A cube with a corner
+  // of no weight gets no vertices, so that voxel is made weightless during the extraction and
+  // given back afterwards.
+  o3c::HashMap map = volume_->map();
+  float* weights = map.GetValueTensors()[1].GetDataPtr<float>();
+  const float first_weight = weights[0];
+  weights[0] = 0.0f;
+  const auto extract = [&] {
+    return volume_->grid.ExtractTriangleMesh(WeightThreshold(max_surface_sigma));
+  };
+  open3d::t::geometry::TriangleMesh extracted;
+  try {
+    extracted = EmptyIfNoSurface(extract);
+  } catch (...) {
+    weights[0] = first_weight;
+    throw;
+  }
+  weights[0] = first_weight;
   if (!extracted.HasVertexPositions() || extracted.GetVertexPositions().GetLength() == 0) return mesh;
   mesh.vertices = Rows<double, Eigen::Vector3d>(extracted.GetVertexPositions());
   if (extracted.HasTriangleIndices())

@@ -19,9 +19,8 @@
 #include "command_line.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/dense/depth_fusion.h"
+#include "stereo_fabmap_slam/dense/keyframe_volume.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
-#include "stereo_fabmap_slam/dense/stereo_depth.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
@@ -88,8 +87,8 @@ void WriteDenseMap(const datasets::EurocSequence& sequence,
                    const camera::StereoRectifier& rectifier,
                    const tools::SlamConfiguration& options, const io::Trajectory& keyframes,
                    const std::string& output, pipeline::JsonObject* summary) {
-  const dense::StereoDepth stereo(options.dense_depth, rectifier.camera());
-  dense::DepthFusion fusion(options.dense_fusion, rectifier.camera());
+  dense::KeyframeVolume volume(options.dense_depth, options.dense_fusion, rectifier.camera(),
+                               /*keep_views=*/false);
   std::vector<double> depth_ms, fusion_ms;
   std::size_t next = 0;  // keyframes and pairs are both in time order
   for (const io::StampedPose& keyframe : keyframes) {
@@ -102,16 +101,14 @@ void WriteDenseMap(const datasets::EurocSequence& sequence,
     const datasets::StereoImages images = sequence.LoadStereoPair(next);
     cv::Mat left, right;
     rectifier.Rectify(images.left, images.right, &left, &right);
-    const double start = NowMs();
-    const cv::Mat depth = stereo.Depth(left, right);
-    const double depth_done = NowMs();
-    fusion.Integrate(left, depth, keyframe.pose);
-    depth_ms.push_back(depth_done - start);
-    fusion_ms.push_back(NowMs() - depth_done);
+    dense::KeyframeVolume::Timing timing;
+    if (!volume.Add(next, left, right, keyframe.pose, &timing)) continue;
+    depth_ms.push_back(timing.depth_ms);
+    fusion_ms.push_back(timing.fusion_ms);
   }
-  const dense::Mesh mesh = fusion.ExtractMesh();
+  const dense::Mesh mesh = volume.ExtractMesh();
   dense::WriteMeshPly(mesh, output + "/mesh.ply");
-  dense::WriteCloudPly(fusion.ExtractCloud(), output + "/dense_cloud.ply");
+  dense::WriteCloudPly(volume.ExtractCloud(), output + "/dense_cloud.ply");
   const auto median = [](std::vector<double> values) {
     if (values.empty()) return 0.0;
     std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
@@ -122,8 +119,9 @@ void WriteDenseMap(const datasets::EurocSequence& sequence,
   summary->Add("dense_fusion_ms_median", median(fusion_ms), 3);
   summary->Add("dense_mesh_vertices", mesh.vertices.size());
   summary->Add("dense_mesh_triangles", mesh.triangles.size());
-  summary->Add("dense_blocks", fusion.blocks());
-  summary->Add("dense_memory_mb", fusion.memory_bytes() / 1048576.0, 1);
+  summary->Add("dense_blocks", volume.fusion().blocks());
+  summary->Add("dense_volume_mb", volume.fusion().memory_bytes() / 1048576.0, 1);
+  summary->Add("dense_memory_mb", volume.memory_bytes() / 1048576.0, 1);
 }
 
 }  // namespace

@@ -1,0 +1,77 @@
+#include "stereo_fabmap_slam/dense/keyframe_volume.h"
+
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+namespace stereo_fabmap_slam::dense {
+namespace {
+
+double Milliseconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+      .count();
+}
+
+// Depth in metres from millimetres and back; what is integrated is what can be taken out again.
+cv::Mat Metres(const cv::Mat& millimetres) {
+  cv::Mat metres;
+  millimetres.convertTo(metres, CV_32F, 1e-3);
+  return metres;
+}
+
+}  // namespace
+
+KeyframeVolume::KeyframeVolume(const StereoDepthOptions& depth_options,
+                               const FusionOptions& fusion_options,
+                               const geometry::StereoCamera& camera, bool keep_views)
+    : stereo_(depth_options, camera),
+      fusion_(fusion_options, camera),
+      voxel_size_(fusion_options.voxel_size),
+      max_depth_(depth_options.max_depth),
+      keep_views_(keep_views) {}
+
+bool KeyframeVolume::Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& right,
+                         const Eigen::Isometry3d& T_map_camera, Timing* timing) {
+  if (kept_.count(id) > 0) return false;
+  const auto start = std::chrono::steady_clock::now();
+  Kept kept{left.clone(), cv::Mat(), T_map_camera};
+  stereo_.Depth(left, right).convertTo(kept.depth_mm, CV_16U, 1e3);  // rounds, saturates
+  const double depth_ms = Milliseconds(start);
+  const auto fusion_start = std::chrono::steady_clock::now();
+  fusion_.Integrate(kept.grey, Metres(kept.depth_mm), T_map_camera);
+  if (timing != nullptr) *timing = Timing{depth_ms, Milliseconds(fusion_start)};
+  if (!keep_views_) kept = Kept{cv::Mat(), cv::Mat(), T_map_camera};
+  kept_.emplace(id, std::move(kept));
+  return true;
+}
+
+bool KeyframeVolume::Moved(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const {
+  // A surface at the depth limit shifts by the translation plus the rotation's arc there.
+  const Eigen::Isometry3d change = from.inverse() * to;
+  const double angle = Eigen::AngleAxisd(change.linear()).angle();
+  return change.translation().norm() + angle * max_depth_ > 0.5 * voxel_size_;
+}
+
+std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d>& poses) {
+  std::size_t moved = 0;
+  for (auto& [id, kept] : kept_) {
+    const auto pose = poses.find(id);
+    if (kept.grey.empty() || pose == poses.end() || !Moved(kept.T_map_camera, pose->second))
+      continue;
+    const cv::Mat depth = Metres(kept.depth_mm);
+    fusion_.Deintegrate(kept.grey, depth, kept.T_map_camera);
+    fusion_.Integrate(kept.grey, depth, pose->second);
+    kept.T_map_camera = pose->second;
+    ++moved;
+  }
+  return moved;
+}
+
+std::size_t KeyframeVolume::memory_bytes() const {
+  std::size_t images = 0;
+  for (const auto& [id, kept] : kept_)
+    images += kept.grey.total() * kept.grey.elemSize() + kept.depth_mm.total() * kept.depth_mm.elemSize();
+  return fusion_.memory_bytes() + images;
+}
+
+}  // namespace stereo_fabmap_slam::dense
