@@ -223,4 +223,22 @@ void SyntheticSequence::Write(const std::string& directory,
   }
 }
 
+HallScene SyntheticSequence::SceneOf(const std::string& directory) {
+  const std::string path = directory + "/mav0/synthetic.yaml";
+  std::ifstream about(path);
+  if (!about) throw std::runtime_error("cannot read " + path);
+  SyntheticSequenceOptions options;
+  bool has_scene = false, has_seed = false;
+  std::string line;
+  while (std::getline(about, line)) {
+    const auto colon = line.find(": ");
+    if (colon == std::string::npos || line[0] == ' ') continue;
+    const std::string key = line.substr(0, colon), value = line.substr(colon + 2);
+    if (key == "scene") options.scene = value, has_scene = true;
+    if (key == "seed") options.seed = std::stoull(value), has_seed = true;
+  }
+  if (!has_scene || !has_seed) throw std::runtime_error(path + " says no scene and seed");
+  return MakeScene(options);
+}
+
 }  // namespace stereo_fabmap_slam::datasets

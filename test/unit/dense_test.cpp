@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <tuple>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -21,6 +20,7 @@
 #include "stereo_fabmap_slam/dense/depth_fusion.h"
 #include "stereo_fabmap_slam/dense/keyframe_volume.h"
 #include "stereo_fabmap_slam/dense/stereo_depth.h"
+#include "stereo_fabmap_slam/dense/surface_comparison.h"
 
 namespace stereo_fabmap_slam::dense {
 namespace {
@@ -98,12 +98,6 @@ datasets::HallScene* StereoDepthOnTheHall::scene_ = nullptr;
 camera::StereoCalibration* StereoDepthOnTheHall::rig_ = nullptr;
 camera::StereoRectifier* StereoDepthOnTheHall::rectifier_ = nullptr;
 
-// Sorted distances' value at fraction q.
-double Quantile(std::vector<double> values, double q) {
-  const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(values.size() - 1));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[static_cast<std::size_t>(k)];
-}
 
 struct DisparityErrors {
   double coverage = 0;          // of the pixels whose exact depth lies within max_depth
@@ -215,34 +209,6 @@ TEST_F(StereoDepthOnTheHall, FusedExactDepthGivesAMeshOnTheExactGeometry) {
   EXPECT_EQ(cloud.normals.size(), cloud.points.size());
 }
 
-// Fraction of `points` with a mesh vertex within `radius`: the vertices binned in cells of the
-// radius, so only a point's own and the 26 neighbouring cells can hold one.
-double FractionCovered(const std::vector<Eigen::Vector3d>& points, const Mesh& mesh, double radius) {
-  struct CellHash {
-    std::size_t operator()(const Eigen::Vector3i& c) const {
-      return static_cast<std::size_t>(c.x()) * 73856093u ^ static_cast<std::size_t>(c.y()) * 19349663u ^
-             static_cast<std::size_t>(c.z()) * 83492791u;
-    }
-  };
-  const auto cell_of = [radius](const Eigen::Vector3d& p) -> Eigen::Vector3i {
-    return (p / radius).array().floor().template cast<int>();
-  };
-  std::unordered_map<Eigen::Vector3i, std::vector<Eigen::Vector3d>, CellHash> cells;
-  for (const Eigen::Vector3d& vertex : mesh.vertices) cells[cell_of(vertex)].push_back(vertex);
-  std::size_t covered = 0;
-  for (const Eigen::Vector3d& point : points) {
-    const Eigen::Vector3i cell = cell_of(point);
-    bool found = false;
-    for (int n = 0; n < 27 && !found; ++n) {
-      const auto bin = cells.find(cell + Eigen::Vector3i(n % 3 - 1, n / 3 % 3 - 1, n / 9 - 1));
-      if (bin == cells.end()) continue;
-      for (const Eigen::Vector3d& vertex : bin->second) found = found || (vertex - point).norm() < radius;
-    }
-    covered += found ? 1 : 0;
-  }
-  return points.empty() ? 0.0 : static_cast<double>(covered) / static_cast<double>(points.size());
-}
-
 TEST_F(StereoDepthOnTheHall, FusedStereoDepthOfALapIsAccurateWhereItIsCertain) {
   // A lap of the loop route, a keyframe a second, its stereo depth fused at the exact poses.
   const datasets::Route route(datasets::RouteKind::kLoop, scene_->options());
@@ -268,7 +234,7 @@ TEST_F(StereoDepthOnTheHall, FusedStereoDepthOfALapIsAccurateWhereItIsCertain) {
   }
   const auto report = [&](const char* what, const Mesh& mesh) {
     const auto [median, p90] = MeshDistances(mesh, *scene_);
-    const double complete = FractionCovered(measured, mesh, 0.05);
+    const double complete = Completeness(mesh.vertices, measured, 0.05);
     std::printf("%s: %zu vertices: median %.4f m, 90 %% %.4f m from the surface; %.3f of the "
                 "measured surface within 5 cm\n",
                 what, mesh.vertices.size(), median, p90, complete);

@@ -56,6 +56,10 @@ class SyntheticSequence {
   static constexpr std::int64_t kFrameNs = 50'000'000;                 // 20 Hz
 
   int frame_count() const;
+  // The geometry of the world a sequence written by Write() shows, from its
+  // mav0/synthetic.yaml (scene and seed; the hall's photographs as by default, which only
+  // texture it). Throws std::runtime_error if the file is missing or says neither.
+  static HallScene SceneOf(const std::string& directory);
 
  private:
   SyntheticSequenceOptions options_;
