@@ -44,6 +44,7 @@ void FusionOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("block_resolution", &block_resolution);
   visitor.Visit("disparity_noise", &disparity_noise);
   visitor.Visit("max_surface_sigma", &max_surface_sigma);
+  visitor.Visit("max_allocation_sigma", &max_allocation_sigma);
 }
 
 void FusionOptions::Validate() const {
@@ -58,6 +59,8 @@ void FusionOptions::Validate() const {
     throw std::invalid_argument(section + "disparity_noise must be a finite number > 0");
   if (!(max_surface_sigma > 0) || !std::isfinite(max_surface_sigma))
     throw std::invalid_argument(section + "max_surface_sigma must be a finite number > 0");
+  if (!(max_allocation_sigma > 0))
+    throw std::invalid_argument(section + "max_allocation_sigma must be > 0");
 }
 
 }  // namespace stereo_fabmap_slam::dense

@@ -97,11 +97,14 @@ std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
   // Every second pixel: at 2 px the samples lie under 2 cm apart on a surface 4 m away.
   constexpr int kStride = 2;
   const double unit = options_.voxel_size * options_.block_resolution;
+  // Farther depths update the blocks nearer ones allocated but allocate none themselves.
+  const double allocation_depth =
+      std::sqrt(options_.max_allocation_sigma * camera_.fx * camera_.baseline / options_.disparity_noise);
   std::unordered_set<Eigen::Vector3i, open3d::utility::hash_eigen<Eigen::Vector3i>> blocks;
   for (int v = 0; v < depth.rows; v += kStride) {
     const float* row = depth.ptr<float>(v);
     for (int u = 0; u < depth.cols; u += kStride) {
-      if (!(row[u] > 0.0f)) continue;
+      if (!(row[u] > 0.0f) || row[u] > allocation_depth) continue;
       const Eigen::Vector3d ray((u - camera_.cx) / camera_.fx, (v - camera_.cy) / camera_.fy, 1.0);
       const double along = options_.truncation / ray.norm();  // depth change of the band
       const Eigen::Vector3d near = T_world_camera * (ray * (row[u] - along));
