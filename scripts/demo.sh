@@ -13,7 +13,7 @@ BIN=build/bin
 OUT=output/demo
 RATE=${DEMO_RATE:-1}
 mkdir -p "$OUT"
-rm -f "$OUT/relocalize.txt" "$OUT/relocalization.txt"
+rm -f "$OUT/relocalize.txt" "$OUT/relocalization.txt" "$OUT/mesh.ply" "$OUT/dense_map.png"
 SECONDS=0
 if [ -n "${DEMO_SEQUENCE:-}" ]; then
   SEQUENCE=$DEMO_SEQUENCE
@@ -57,14 +57,15 @@ start_private_master "$PWD/$OUT/ros"
 # (save_map:=) when it shuts down at the end of the bag.
 RUN=$OUT/run
 rm -rf "$RUN"
-echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector + Visualizer + Recorder, rosbag play $bag"
+echo "== running the ROS graph: nodelet manager + StereoTracker + Backend + LoopDetector + Visualizer + DenseMapper + Recorder, rosbag play $bag"
 graph_start=$SECONDS
 rviz=false
 [ "${RVIZ:-0}" = 1 ] && rviz=true
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
 timeout $((60 + 3 * duration)) roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$PWD/$bag" \
   rate:="$RATE" calibration:="$calibration" exit_at_end:=true rviz:=$rviz output:="$PWD/$RUN" \
-  save_map:="$PWD/$OUT/map.bin" > "$OUT/roslaunch.log" 2>&1 || {
+  save_map:="$PWD/$OUT/map.bin" dense:=true save_mesh:="$PWD/$OUT/mesh.ply" \
+  > "$OUT/roslaunch.log" 2>&1 || {
   echo "demo: the ROS graph failed; see $OUT/roslaunch.log" >&2; exit 1; }
 graph_seconds=$((SECONDS - graph_start))
 [ -f "$RUN/summary.json" ] || { echo "demo: no run written; see $OUT/roslaunch.log" >&2; exit 1; }
@@ -154,6 +155,17 @@ if [ -f "$OUT/relocalization.txt" ] && [ "${relocalization#found}" != "$relocali
     | awk '/^pose/ {printf "%.2f cm, %.2f deg", 100 * $3, $5}')
   relocalization="$relocalization, error ${error} against ground truth"
 fi
+# The dense map the DenseMapper wrote at shutdown: against the rendered hall's exact geometry
+# (a picture coloured by error, with the keyframes), or for a real sequence its size alone.
+dense="no mesh written; see $OUT/roslaunch.log"
+if [ -f "$OUT/mesh.ply" ] && [ -f "$SEQUENCE/mav0/synthetic.yaml" ]; then
+  dense=$("$BIN/evaluate_reconstruction" "$OUT/mesh.ply" --sequence "$SEQUENCE" --run "$RUN" \
+    --picture "$OUT/dense_map.png" 2> /dev/null | awk '
+      /^points/ {n = $2} /^accuracy median/ {m = $3} /^accuracy 90/ {p = $4} /^completeness/ {c = $2}
+      END {printf "%d vertices, %.1f / %.1f cm from the hall (median / 90 %%), %.0f %% of what the keyframes saw within 5 cm", n, 100 * m, 100 * p, 100 * c}')
+elif [ -f "$OUT/mesh.ply" ]; then
+  dense="$OUT/mesh.ply ($(du -h "$OUT/mesh.ply" | cut -f1))"
+fi
 echo
 echo "demo summary ($NAME)"
 echo "  frames played           $frames"
@@ -164,6 +176,7 @@ echo "  revisits present        $loops_present"
 echo "  ATE RMSE odometry       $ate_odometry cm"
 echo "  ATE RMSE loop-closed    $ate cm"
 echo "  relocalization          $relocalization"
+echo "  dense map               $dense"
 echo "  ROS graph run time      ${graph_seconds} s (bag of $(rosbag info -y -k duration "$bag" | cut -c1-5) s at rate $RATE)"
-echo "  files                   $RUN/ (trajectory.txt, odometry.txt, keyframes.txt, loops.csv, timing.csv, summary.json), $OUT/map.bin, trajectory.png, evaluation.txt, relocalize.txt"
+echo "  files                   $RUN/ (trajectory.txt, odometry.txt, keyframes.txt, loops.csv, timing.csv, summary.json), $OUT/map.bin, trajectory.png, evaluation.txt, relocalize.txt, mesh.ply, dense_map.png"
 echo "== demo done in ${SECONDS} s"

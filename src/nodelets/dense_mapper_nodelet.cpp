@@ -58,6 +58,7 @@ struct DenseMapperParameters {
   double cloud_cell = 0.05;  // [m] one point of dense_cloud a cube of this edge
   // Triangles of dense_mesh at most (every k-th beyond): 100,000 are 12 MB a message.
   int max_mesh_triangles = 100000;
+  std::string save_mesh;  // a PLY file the mesh is written to when the nodelet shuts down
   std::string printed;
 };
 
@@ -79,6 +80,7 @@ DenseMapperParameters ReadParameters(const ros::NodeHandle& private_node) {
   p.rate = private_node.param("rate", p.rate);
   p.cloud_cell = private_node.param("cloud_cell", p.cloud_cell);
   p.max_mesh_triangles = private_node.param("max_mesh_triangles", p.max_mesh_triangles);
+  p.save_mesh = private_node.param("save_mesh", p.save_mesh);
   if (p.queue_size < 1 || p.buffered_pairs < 1 || !(p.rate > 0) || !(p.cloud_cell >= 0) ||
       p.max_mesh_triangles < 1) {
     throw std::invalid_argument(
@@ -87,7 +89,7 @@ DenseMapperParameters ReadParameters(const ros::NodeHandle& private_node) {
   ros_parameters::RejectUnknownParameters(
       private_node,
       {"approximate_sync", "buffered_pairs", "calibration_file", "cloud_cell", "config_file",
-       "image_transport", "map_frame", "max_mesh_triangles", "queue_size", "rate",
+       "image_transport", "map_frame", "max_mesh_triangles", "queue_size", "rate", "save_mesh",
        "use_camera_info"});
   return p;
 }
@@ -104,6 +106,7 @@ class DenseMapperNodelet : public nodelet::Nodelet {
     }
     wake_.notify_all();
     if (worker_.joinable()) worker_.join();
+    SaveMeshAtShutdown();
   }
 
  private:
@@ -122,6 +125,8 @@ class DenseMapperNodelet : public nodelet::Nodelet {
   void Fuse(const Job& job, const Eigen::Isometry3d& T_map_odom,
             const std::map<std::uint64_t, Eigen::Isometry3d>& map_poses);
   void Publish();
+  // ~save_mesh, when the graph shuts down (what the Recorder does for the run's files).
+  void SaveMeshAtShutdown();
   template <typename Extract, typename Write>
   bool Save(const std::string& path, Extract extract, Write write,
             stereo_fabmap_slam::SavePly::Response* response);
@@ -368,6 +373,20 @@ void DenseMapperNodelet::Publish() {
     mesh_publisher_.publish(ros_visualization::DenseMeshMarker(
         *mesh, static_cast<std::size_t>(parameters_.max_mesh_triangles), parameters_.map_frame,
         stamp));
+  }
+}
+
+void DenseMapperNodelet::SaveMeshAtShutdown() {
+  if (parameters_.save_mesh.empty()) return;
+  std::lock_guard<std::mutex> lock(volume_mutex_);
+  if (!volume_) return;
+  try {
+    const dense::Mesh mesh = volume_->ExtractMesh();
+    dense::WriteMeshPly(mesh, parameters_.save_mesh);
+    NODELET_INFO_STREAM("wrote " << parameters_.save_mesh << ": " << mesh.vertices.size()
+                                 << " vertices of " << volume_->keyframes() << " keyframes");
+  } catch (const std::exception& error) {
+    NODELET_ERROR_STREAM("~save_mesh " << parameters_.save_mesh << ": " << error.what());
   }
 }
 
