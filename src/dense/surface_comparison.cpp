@@ -32,6 +32,18 @@ double Completeness(const std::vector<Eigen::Vector3d>& reconstruction,
   return static_cast<double>(covered) / static_cast<double>(reference.size());
 }
 
+double SurfaceArea(const std::vector<Eigen::Vector3d>& vertices,
+                   const std::vector<Eigen::Vector3i>& triangles) {
+  double area = 0.0;
+  for (const Eigen::Vector3i& triangle : triangles) {
+    const Eigen::Vector3d& a = vertices[static_cast<std::size_t>(triangle[0])];
+    area += 0.5 * (vertices[static_cast<std::size_t>(triangle[1])] - a)
+                      .cross(vertices[static_cast<std::size_t>(triangle[2])] - a)
+                      .norm();
+  }
+  return area;
+}
+
 double Quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;
   const auto k = static_cast<std::ptrdiff_t>(

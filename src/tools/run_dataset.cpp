@@ -21,6 +21,7 @@
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/dense/keyframe_volume.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
+#include "stereo_fabmap_slam/dense/surface_comparison.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
@@ -119,6 +120,8 @@ void WriteDenseMap(const datasets::EurocSequence& sequence,
   summary->Add("dense_fusion_ms_median", median(fusion_ms), 3);
   summary->Add("dense_mesh_vertices", mesh.vertices.size());
   summary->Add("dense_mesh_triangles", mesh.triangles.size());
+  const double area = dense::SurfaceArea(mesh.vertices, mesh.triangles);
+  summary->Add("dense_mesh_area_m2", area, 1);
   summary->Add("dense_blocks", volume.fusion().blocks());
   summary->Add("dense_volume_mb", volume.fusion().memory_bytes() / 1048576.0, 1);
   summary->Add("dense_memory_mb", volume.memory_bytes() / 1048576.0, 1);

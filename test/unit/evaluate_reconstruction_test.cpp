@@ -82,5 +82,13 @@ TEST(SurfaceComparison, DistancesAndCompletenessOfTwoPlanes) {
   EXPECT_EQ(dense::Completeness(half, {}, 0.05), 0.0);
 }
 
+TEST(SurfaceComparison, AreaOfAMesh) {
+  // A unit square as two triangles, and a right triangle of legs 2 and 3 beside it.
+  const std::vector<Eigen::Vector3d> vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                                 {5, 0, 0}, {7, 0, 0}, {5, 0, 3}};
+  EXPECT_NEAR(dense::SurfaceArea(vertices, {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}}), 1.0 + 3.0, 1e-12);
+  EXPECT_EQ(dense::SurfaceArea(vertices, {}), 0.0);
+}
+
 }  // namespace
 }  // namespace stereo_fabmap_slam::test

@@ -282,7 +282,7 @@ TEST(RvizConfig, TheShippedViewFollowsTheCameraAndShowsThePackagesTopics) {
       ++topics;
     }
   }
-  EXPECT_EQ(topics, 5) << "map cloud, markers, two paths, the tracking image";
+  EXPECT_EQ(topics, 7) << "map cloud, markers, two paths, the tracking image, dense mesh and cloud";
 }
 
 }  // namespace

@@ -17,6 +17,11 @@ std::vector<double> NearestDistances(const std::vector<Eigen::Vector3d>& points,
 double Completeness(const std::vector<Eigen::Vector3d>& reconstruction,
                     const std::vector<Eigen::Vector3d>& reference, double radius);
 
+// The summed area of a mesh's triangles [m^2]: the surface a volume holds, to state its memory
+// per square metre.
+double SurfaceArea(const std::vector<Eigen::Vector3d>& vertices,
+                   const std::vector<Eigen::Vector3i>& triangles);
+
 // The value below which fraction `q` (0-1) of `values` lie (nearest rank); 0 if empty.
 double Quantile(std::vector<double> values, double q);
 
