@@ -154,9 +154,9 @@ screenshots: build
 	$(BIN)/make_synthetic_sequence --output $(SCREENSHOTS)/loop --route loop --seconds 40 --seed 1 > /dev/null
 	for attempt in 1 2 3; do bash scripts/rviz_screenshot.sh \
 	  $(SCREENSHOTS)/MH01_first10s.bag docs/rviz_euroc_mh01.png && break; done
-	for attempt in 1 2 3; do RVIZ_VIEW="19 2 3 map" bash scripts/rviz_screenshot.sh \
+	for attempt in 1 2 3; do RVIZ_VIEW="19 2 3 map" RVIZ_WAIT=60 bash scripts/rviz_screenshot.sh \
 	  $(SCREENSHOTS)/loop/sequence.bag docs/rviz_synthetic_loop.png \
-	  $(SCREENSHOTS)/loop/stereo_calibration.yaml && break; done
+	  $(SCREENSHOTS)/loop/stereo_calibration.yaml dense:=true && break; done
 
 # The thesis' studies (descriptors, PnP kernels, keyframe presets, relocalization recall) on
 # ../shared/data, opencv-doc's graf pair and rendered routes: output/evaluation/report.md with

@@ -6,6 +6,8 @@
 # RVIZ_VIEW="DISTANCE X Y [FRAME]" moves the shipped config's orbit view (distance [m], focal
 # point [m] in FRAME, by default the shipped one, base_link: the view follows the camera), e.g.
 # "19 2 3 map" for an overview of a whole route; everything else stays as shipped.
+# RVIZ_WAIT=S waits S seconds after the bag's end (default 4): with dense:=true the DenseMapper,
+# below the tracker's priority and beside rviz's software rendering, is still fusing then.
 # Needs `make build` and the packages rviz, xvfb and imagemagick (`make screenshots` installs
 # them and makes the pictures in docs/).
 set -euo pipefail
@@ -63,7 +65,7 @@ roslaunch stereo_fabmap_slam euroc_bag.launch bag:="$bag" calibration:="$calibra
   rviz_config:="$config" delay:=6 "$@" > "$log_dir/roslaunch.log" 2>&1 &
 launch_pid=$!
 duration=$(rosbag info -y -k duration "$bag" | cut -d. -f1)
-deadline=$((SECONDS + 90 + 3 * duration))
+deadline=$((SECONDS + 90 + 3 * duration + ${RVIZ_WAIT:-4}))
 echo "playing $bag ($duration s) with rviz; logs in $log_dir"
 until launched_node_running "$launch_pid" bag_player; do
   [ $SECONDS -lt $deadline ] && kill -0 "$launch_pid" 2> /dev/null || {
@@ -74,7 +76,7 @@ while launched_node_running "$launch_pid" bag_player; do
   [ $SECONDS -lt $deadline ] || { echo "$0: the bag did not end in time" >&2; exit 1; }
   sleep 0.5
 done
-sleep 4  # the Visualizer's last refresh and rviz's next frames
+sleep "${RVIZ_WAIT:-4}"  # the Visualizer's (and DenseMapper's) last refresh and rviz's next frames
 # rviz under Xvfb's software OpenGL now and then aborts at start: a black picture is no picture.
 if ! launched_node_running "$launch_pid" rviz; then
   echo "$0: rviz is not running (see $log_dir/log); try again" >&2

@@ -1,8 +1,11 @@
 #include "stereo_fabmap_slam/dense/keyframe_volume.h"
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <utility>
+#include <vector>
 
 namespace stereo_fabmap_slam::dense {
 namespace {
@@ -45,26 +48,43 @@ bool KeyframeVolume::Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& r
   return true;
 }
 
-bool KeyframeVolume::Moved(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const {
+double KeyframeVolume::Shift(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const {
   // A surface at the depth limit shifts by the translation plus the rotation's arc there.
   const Eigen::Isometry3d change = from.inverse() * to;
-  const double angle = Eigen::AngleAxisd(change.linear()).angle();
-  return change.translation().norm() + angle * max_depth_ > 0.5 * voxel_size_;
+  return change.translation().norm() + Eigen::AngleAxisd(change.linear()).angle() * max_depth_;
 }
 
-std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d>& poses) {
-  std::size_t moved = 0;
-  for (auto& [id, kept] : kept_) {
+std::size_t KeyframeVolume::Moving(const std::map<std::uint64_t, Eigen::Isometry3d>& poses) const {
+  std::size_t moving = 0;
+  for (const auto& [id, kept] : kept_) {
     const auto pose = poses.find(id);
-    if (kept.grey.empty() || pose == poses.end() || !Moved(kept.T_map_camera, pose->second))
-      continue;
+    if (!kept.grey.empty() && pose != poses.end() &&
+        Shift(kept.T_map_camera, pose->second) > 0.5 * voxel_size_)
+      ++moving;
+  }
+  return moving;
+}
+
+std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d>& poses,
+                                 std::size_t max_keyframes) {
+  std::vector<std::pair<double, std::uint64_t>> shifts;  // (shift, id)
+  for (const auto& [id, kept] : kept_) {
+    const auto pose = poses.find(id);
+    if (kept.grey.empty() || pose == poses.end()) continue;
+    const double shift = Shift(kept.T_map_camera, pose->second);
+    if (shift > 0.5 * voxel_size_) shifts.emplace_back(shift, id);
+  }
+  std::sort(shifts.begin(), shifts.end(), std::greater<>());
+  if (shifts.size() > max_keyframes) shifts.resize(max_keyframes);
+  for (const auto& [shift, id] : shifts) {
+    Kept& kept = kept_.at(id);
+    const Eigen::Isometry3d& pose = poses.at(id);
     const cv::Mat depth = Metres(kept.depth_mm);
     fusion_.Deintegrate(kept.grey, depth, kept.T_map_camera);
-    fusion_.Integrate(kept.grey, depth, pose->second);
-    kept.T_map_camera = pose->second;
-    ++moved;
+    fusion_.Integrate(kept.grey, depth, pose);
+    kept.T_map_camera = pose;
   }
-  return moved;
+  return shifts.size();
 }
 
 std::size_t KeyframeVolume::memory_bytes() const {

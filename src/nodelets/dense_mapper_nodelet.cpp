@@ -35,6 +35,7 @@
 #include "parameter_reader.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/dense/keyframe_volume.h"
+#include "stereo_fabmap_slam/dense/mesh_simplification.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
 #include "stereo_image_input.h"
 #include "tracker_wiring.h"
@@ -56,7 +57,8 @@ struct DenseMapperParameters {
   int buffered_pairs = 100;
   double rate = 0.5;         // [Hz] of dense_cloud and dense_mesh, when they changed
   double cloud_cell = 0.05;  // [m] one point of dense_cloud a cube of this edge
-  // Triangles of dense_mesh at most (every k-th beyond): 100,000 are 12 MB a message.
+  // Triangles of dense_mesh at most (the mesh simplified until it fits): 100,000 are 12 MB a
+  // message.
   int max_mesh_triangles = 100000;
   std::string save_mesh;  // a PLY file the mesh is written to when the nodelet shuts down
   std::string printed;
@@ -275,12 +277,19 @@ void DenseMapperNodelet::Work() {
   auto last_published = std::chrono::steady_clock::now();
   Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
   std::map<std::uint64_t, Eigen::Isometry3d> map_poses;
+  // After a loop closes every map_graph moves most keyframes a little: fused again all at once
+  // they kept the worker minutes behind the new keyframes on the demo's loop (rviz beside it).
+  // So new keyframes come first, then at most this many moves (those that moved most), about a
+  // keyframe period's work (70-100 ms each beside the tracker), until none is left.
+  constexpr std::size_t kMovesPerRound = 4;
+  bool moves_pending = false;
   while (true) {
     std::deque<Job> jobs;
     stereo_fabmap_slam::MapGraphConstPtr graph;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait_for(lock, period, [this] { return stop_ || !jobs_.empty() || graph_changed_; });
+      wake_.wait_for(lock, moves_pending ? std::chrono::duration<double>(0) : period,
+                     [this] { return stop_ || !jobs_.empty() || graph_changed_; });
       if (stop_) return;
       jobs.swap(jobs_);
       if (graph_changed_) graph = graph_;
@@ -291,16 +300,18 @@ void DenseMapperNodelet::Work() {
       map_poses.clear();
       for (std::size_t i = 0; i < graph->keyframe_ids.size() && i < graph->keyframe_poses.size(); ++i)
         map_poses[graph->keyframe_ids[i]] = ros_conversions::FromPoseMessage(graph->keyframe_poses[i]);
+      moves_pending = true;
     }
     for (const Job& job : jobs) Fuse(job, T_map_odom, map_poses);
-    if (graph) {
+    if (moves_pending) {
       std::lock_guard<std::mutex> lock(volume_mutex_);
-      if (volume_) {
-        const std::size_t moved = volume_->Move(map_poses);
-        if (moved > 0) {
-          NODELET_INFO_STREAM(moved << " keyframes moved by the map: fused again at their new poses");
-          changed_since_published_ = true;
-        }
+      const std::size_t moved = volume_ ? volume_->Move(map_poses, kMovesPerRound) : 0;
+      moves_pending = moved == kMovesPerRound;
+      if (moved > 0) {
+        changed_since_published_ = true;
+        NODELET_INFO_STREAM_THROTTLE(
+            5.0, "keyframes moved by the map are fused again at their new poses ("
+                     << volume_->Moving(map_poses) << " still to move)");
       }
     }
     if (changed_since_published_ && std::chrono::steady_clock::now() - last_published >= period) {
@@ -370,9 +381,15 @@ void DenseMapperNodelet::Publish() {
                                                                   parameters_.map_frame, stamp));
   }
   if (mesh) {
-    mesh_publisher_.publish(ros_visualization::DenseMeshMarker(
-        *mesh, static_cast<std::size_t>(parameters_.max_mesh_triangles), parameters_.map_frame,
-        stamp));
+    // Coarser until it fits: vertices merged per cube of twice the voxel, then doubled (the
+    // demo's 40 s loop: 2.3 million triangles at 2 cm).
+    const auto max_triangles = static_cast<std::size_t>(parameters_.max_mesh_triangles);
+    for (double cell = 2.0 * parameters_.fusion.voxel_size; mesh->triangles.size() > max_triangles;
+         cell *= 2.0) {
+      *mesh = dense::SimplifiedMesh(*mesh, cell);
+    }
+    mesh_publisher_.publish(
+        ros_visualization::DenseMeshMarker(*mesh, max_triangles, parameters_.map_frame, stamp));
   }
 }
 

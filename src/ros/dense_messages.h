@@ -18,7 +18,8 @@ namespace stereo_fabmap_slam::ros_visualization {
 // grey level (0-1).
 sensor_msgs::PointCloud2 DenseCloudMessage(const dense::Cloud& cloud, double cell,
                                            const std::string& frame, const ros::Time& stamp);
-// At most `max_triangles` triangles (every k-th beyond that: rviz stays fluid, the shape stays).
+// At most `max_triangles` triangles (every k-th beyond that; the DenseMapper simplifies the mesh
+// to fit first, dense::SimplifiedMesh, since scattered triangles show no surface).
 visualization_msgs::Marker DenseMeshMarker(const dense::Mesh& mesh, std::size_t max_triangles,
                                            const std::string& frame, const ros::Time& stamp);
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -307,7 +308,12 @@ TEST_F(StereoDepthOnTheHall, KeyframesMovedByLoopClosingAreFusedAgainAtTheirNewP
   // A change below half a voxel at the depth limit is no move (keyframe 1: 1 mm).
   Eigen::Isometry3d nudged = RectifiedLeftPose(2.0);
   nudged.translation().x() += 0.001;
-  EXPECT_EQ(moved.Move({{1, nudged}, {2, RectifiedLeftPose(3.0)}}), 1u);
+  const std::map<std::uint64_t, Eigen::Isometry3d> corrected = {{1, nudged},
+                                                                 {2, RectifiedLeftPose(3.0)}};
+  EXPECT_EQ(moved.Moving(corrected), 1u);
+  EXPECT_EQ(moved.Move(corrected, 0), 0u);  // none this round
+  EXPECT_EQ(moved.Move(corrected), 1u);
+  EXPECT_EQ(moved.Moving(corrected), 0u);
   const Mesh after = moved.ExtractMesh();
   const Mesh expected = right_first_time.ExtractMesh();
   const auto [median_before, p90_before] = MeshDistances(before, *scene_);

@@ -35,9 +35,13 @@ class KeyframeVolume {
   bool Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& right,
            const Eigen::Isometry3d& T_map_camera, Timing* timing = nullptr);
   // Every kept keyframe of `poses` whose pose moved so far that its surface would shift by half
-  // a voxel at the depth limit is taken out at its old pose and put back at the new one; keyframes
-  // `poses` lacks stay. Returns how many moved (none without keep_views).
-  std::size_t Move(const std::map<std::uint64_t, Eigen::Isometry3d>& poses);
+  // a voxel at the depth limit is taken out at its old pose and put back at the new one, those
+  // that moved most first, at most `max_keyframes` of them; keyframes `poses` lacks stay.
+  // Returns how many moved (none without keep_views); call again with the same poses for the
+  // rest (Moving() says how many are left).
+  std::size_t Move(const std::map<std::uint64_t, Eigen::Isometry3d>& poses,
+                   std::size_t max_keyframes = static_cast<std::size_t>(-1));
+  std::size_t Moving(const std::map<std::uint64_t, Eigen::Isometry3d>& poses) const;
 
   Mesh ExtractMesh() const { return fusion_.ExtractMesh(); }
   Cloud ExtractCloud() const { return fusion_.ExtractCloud(); }
@@ -52,7 +56,8 @@ class KeyframeVolume {
     cv::Mat depth_mm;  // CV_16U [mm]: what was integrated (0.5 mm of rounding, far below the noise)
     Eigen::Isometry3d T_map_camera;
   };
-  bool Moved(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const;
+  // How far a keyframe's surface shifts at the depth limit [m] between two poses.
+  double Shift(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const;
 
   StereoDepth stereo_;
   DepthFusion fusion_;
