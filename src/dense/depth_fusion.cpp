@@ -74,14 +74,15 @@ void DepthFusion::Reset() {
   volume_ = std::make_unique<Volume>(options_.voxel_size, options_.block_resolution);
 }
 
-void DepthFusion::Integrate(const cv::Mat& grey, const cv::Mat& depth,
-                            const Eigen::Isometry3d& T_world_camera) {
-  Fuse(grey, depth, T_world_camera, 1.0);
+std::vector<Eigen::Vector3i> DepthFusion::Integrate(const cv::Mat& grey, const cv::Mat& depth,
+                                                    const Eigen::Isometry3d& T_world_camera) {
+  return Fuse(grey, depth, T_world_camera, nullptr);
 }
 
 void DepthFusion::Deintegrate(const cv::Mat& grey, const cv::Mat& depth,
-                              const Eigen::Isometry3d& T_world_camera) {
-  Fuse(grey, depth, T_world_camera, -1.0);
+                              const Eigen::Isometry3d& T_world_camera,
+                              const std::vector<Eigen::Vector3i>& blocks) {
+  Fuse(grey, depth, T_world_camera, &blocks);
 }
 
 double DepthFusion::Weight(double depth) const {
@@ -120,8 +121,10 @@ std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
   return std::vector<Eigen::Vector3i>(blocks.begin(), blocks.end());
 }
 
-void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
-                       const Eigen::Isometry3d& T_world_camera, double sign) {
+std::vector<Eigen::Vector3i> DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
+                                               const Eigen::Isometry3d& T_world_camera,
+                                               const std::vector<Eigen::Vector3i>* blocks) {
+  const double sign = blocks == nullptr ? 1.0 : -1.0;
   if (grey.type() != CV_8UC1 || depth.type() != CV_32FC1 || grey.size() != camera_.size ||
       depth.size() != camera_.size) {
     throw std::invalid_argument(
@@ -130,8 +133,9 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
   const int resolution = options_.block_resolution;
   const std::int64_t voxels_per_block = static_cast<std::int64_t>(resolution) * resolution * resolution;
   o3c::HashMap map = volume_->map();
-  const std::vector<Eigen::Vector3i> near_surface = BlocksNearSurface(depth, T_world_camera);
-  if (sign > 0 && !near_surface.empty()) {
+  const std::vector<Eigen::Vector3i> near_surface =
+      blocks == nullptr ? BlocksNearSurface(depth, T_world_camera) : std::vector<Eigen::Vector3i>();
+  if (!near_surface.empty()) {
     // New blocks start empty (Open3D leaves a new block's values as they were in memory).
     o3c::Tensor buffer_indices, created;
     map.Activate(BlockKeys(near_surface), buffer_indices, created);
@@ -149,8 +153,17 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
   // Every allocated block the view sees: the blocks around its surfaces, and the ones in front
   // of them, whose voxels its free space updates.
   const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
-  const std::vector<std::pair<Eigen::Vector3i, int>> visible =
-      VisibleBlocks(map, depth, T_camera_world);
+  std::vector<std::pair<Eigen::Vector3i, int>> visible;
+  if (blocks == nullptr) {
+    visible = VisibleBlocks(map, depth, T_camera_world);
+  } else if (!blocks->empty()) {
+    o3c::Tensor buffer_indices, found;
+    map.Find(BlockKeys(*blocks), buffer_indices, found);
+    const int* index = buffer_indices.GetDataPtr<int>();
+    const bool* is_found = found.GetDataPtr<bool>();
+    for (std::size_t i = 0; i < blocks->size(); ++i)
+      if (is_found[i]) visible.emplace_back((*blocks)[i], index[i]);
+  }
   std::vector<o3c::Tensor> values = map.GetValueTensors();
   const ViewData view{grey,
                       depth,
@@ -167,6 +180,10 @@ void DepthFusion::Fuse(const cv::Mat& grey, const cv::Mat& depth,
       UpdateBlock(view, block, buffer_index, sign);
     }
   });
+  std::vector<Eigen::Vector3i> updated;
+  updated.reserve(visible.size());
+  for (const auto& [block, buffer_index] : visible) updated.push_back(block);
+  return updated;
 }
 
 std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(

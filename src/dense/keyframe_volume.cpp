@@ -37,13 +37,13 @@ bool KeyframeVolume::Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& r
                          const Eigen::Isometry3d& T_map_camera, Timing* timing) {
   if (kept_.count(id) > 0) return false;
   const auto start = std::chrono::steady_clock::now();
-  Kept kept{left.clone(), cv::Mat(), T_map_camera};
+  Kept kept{left.clone(), cv::Mat(), T_map_camera, {}};
   stereo_.Depth(left, right).convertTo(kept.depth_mm, CV_16U, 1e3);  // rounds, saturates
   const double depth_ms = Milliseconds(start);
   const auto fusion_start = std::chrono::steady_clock::now();
-  fusion_.Integrate(kept.grey, Metres(kept.depth_mm), T_map_camera);
+  kept.blocks = fusion_.Integrate(kept.grey, Metres(kept.depth_mm), T_map_camera);
   if (timing != nullptr) *timing = Timing{depth_ms, Milliseconds(fusion_start)};
-  if (!keep_views_) kept = Kept{cv::Mat(), cv::Mat(), T_map_camera};
+  if (!keep_views_) kept = Kept{cv::Mat(), cv::Mat(), T_map_camera, {}};
   kept_.emplace(id, std::move(kept));
   return true;
 }
@@ -80,8 +80,8 @@ std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d
     Kept& kept = kept_.at(id);
     const Eigen::Isometry3d& pose = poses.at(id);
     const cv::Mat depth = Metres(kept.depth_mm);
-    fusion_.Deintegrate(kept.grey, depth, kept.T_map_camera);
-    fusion_.Integrate(kept.grey, depth, pose);
+    fusion_.Deintegrate(kept.grey, depth, kept.T_map_camera, kept.blocks);
+    kept.blocks = fusion_.Integrate(kept.grey, depth, pose);
     kept.T_map_camera = pose;
   }
   return shifts.size();
@@ -90,7 +90,9 @@ std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d
 std::size_t KeyframeVolume::memory_bytes() const {
   std::size_t images = 0;
   for (const auto& [id, kept] : kept_)
-    images += kept.grey.total() * kept.grey.elemSize() + kept.depth_mm.total() * kept.depth_mm.elemSize();
+    images += kept.grey.total() * kept.grey.elemSize() +
+              kept.depth_mm.total() * kept.depth_mm.elemSize() +
+              kept.blocks.size() * sizeof(Eigen::Vector3i);
   return fusion_.memory_bytes() + images;
 }
 

@@ -1,5 +1,6 @@
 #include "dense_messages.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <unordered_set>

@@ -49,13 +49,16 @@ class DepthFusion {
   // this view's surfaces (free space clears what noisier views put there). Open3D's own
   // integration weighs every pixel alike and touches only the blocks around the view's
   // surfaces, so the update is written here, into Open3D's blocks, whose marching cubes make
-  // the mesh.
-  void Integrate(const cv::Mat& grey, const cv::Mat& depth,
-                 const Eigen::Isometry3d& T_world_camera);
-  // Takes a view integrated before out again (the same images and pose): what a keyframe whose
-  // pose loop closing moved needs before it is integrated at its new pose. Open3D has none.
+  // the mesh. Returns the blocks the view updated, which taking it out again needs.
+  std::vector<Eigen::Vector3i> Integrate(const cv::Mat& grey, const cv::Mat& depth,
+                                         const Eigen::Isometry3d& T_world_camera);
+  // Takes a view integrated before out again (the same images and pose, and the blocks its
+  // Integrate returned): what a keyframe whose pose loop closing moved needs before it is
+  // integrated at its new pose. Open3D has none. Only those blocks: one allocated later in the
+  // view's free space never had the view's update, and taking it out there would corrupt it.
   void Deintegrate(const cv::Mat& grey, const cv::Mat& depth,
-                   const Eigen::Isometry3d& T_world_camera);
+                   const Eigen::Isometry3d& T_world_camera,
+                   const std::vector<Eigen::Vector3i>& blocks);
   void Reset();
 
   // Only where the fused distance is known well enough (FusionOptions::max_surface_sigma, or
@@ -78,8 +81,11 @@ class DepthFusion {
   std::vector<std::pair<Eigen::Vector3i, int>> VisibleBlocks(
       open3d::core::HashMap& map, const cv::Mat& depth,
       const Eigen::Isometry3d& T_camera_world) const;
-  void Fuse(const cv::Mat& grey, const cv::Mat& depth, const Eigen::Isometry3d& T_world_camera,
-            double sign);
+  // Integrates (`blocks` null) or takes out (the blocks given) a view; returns the blocks
+  // updated.
+  std::vector<Eigen::Vector3i> Fuse(const cv::Mat& grey, const cv::Mat& depth,
+                                    const Eigen::Isometry3d& T_world_camera,
+                                    const std::vector<Eigen::Vector3i>* blocks);
   // One block's voxels updated by one view (`sign` -1 takes it out).
   void UpdateBlock(const ViewData& view, const Eigen::Vector3i& block, int buffer_index,
                    double sign) const;

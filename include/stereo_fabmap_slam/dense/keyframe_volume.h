@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
@@ -15,7 +16,7 @@
 namespace stereo_fabmap_slam::dense {
 
 // The dense map of a keyframe map: each keyframe's stereo depth fused at its map pose, and kept
-// (grey image and depth, 3 bytes a pixel) so that when loop closing moves the keyframe its
+// (grey image and depth, 3 bytes a pixel, and the blocks it updated) so that when loop closing moves the keyframe its
 // depth is taken out at the old pose and put back at the new one. What the DenseMapper nodelet
 // runs in its own thread, and run_dataset --dense after the run. Not thread-safe.
 class KeyframeVolume {
@@ -55,6 +56,7 @@ class KeyframeVolume {
     cv::Mat grey;   // CV_8U, the rectified left image
     cv::Mat depth_mm;  // CV_16U [mm]: what was integrated (0.5 mm of rounding, far below the noise)
     Eigen::Isometry3d T_map_camera;
+    std::vector<Eigen::Vector3i> blocks;  // those its integration updated (12 bytes each)
   };
   // How far a keyframe's surface shifts at the depth limit [m] between two poses.
   double Shift(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const;
