@@ -29,7 +29,8 @@ constexpr std::size_t kBytesPerVoxel = sizeof(float) + sizeof(float) + sizeof(st
 o3c::Tensor BlockKeys(const std::vector<Eigen::Vector3i>& blocks) {
   std::vector<int> flat;
   flat.reserve(3 * blocks.size());
-  for (const Eigen::Vector3i& block : blocks) flat.insert(flat.end(), {block.x(), block.y(), block.z()});
+  for (const Eigen::Vector3i& block : blocks)
+    flat.insert(flat.end(), {block.x(), block.y(), block.z()});
   return o3c::Tensor(flat, {static_cast<std::int64_t>(blocks.size()), 3}, o3c::Int32);
 }
 
@@ -37,8 +38,8 @@ o3c::Tensor BlockKeys(const std::vector<Eigen::Vector3i>& blocks) {
 
 struct DepthFusion::Volume {
   Volume(double voxel_size, int resolution)
-      : grid({"tsdf", "weight", "grey"}, {o3c::Float32, o3c::Float32, o3c::UInt8},
-             {{1}, {1}, {1}}, static_cast<float>(voxel_size), resolution, kInitialBlocks) {}
+      : grid({"tsdf", "weight", "grey"}, {o3c::Float32, o3c::Float32, o3c::UInt8}, {{1}, {1}, {1}},
+             static_cast<float>(voxel_size), resolution, kInitialBlocks) {}
 
   // The grid's hash map shares its storage with the grid (rehashing included).
   o3c::HashMap map() { return grid.GetHashMap(); }
@@ -99,8 +100,8 @@ std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
   constexpr int kStride = 2;
   const double unit = options_.voxel_size * options_.block_resolution;
   // Farther depths update the blocks nearer ones allocated but allocate none themselves.
-  const double allocation_depth =
-      std::sqrt(options_.max_allocation_sigma * camera_.fx * camera_.baseline / options_.disparity_noise);
+  const double allocation_depth = std::sqrt(options_.max_allocation_sigma * camera_.fx *
+                                            camera_.baseline / options_.disparity_noise);
   std::unordered_set<Eigen::Vector3i, open3d::utility::hash_eigen<Eigen::Vector3i>> blocks;
   for (int v = 0; v < depth.rows; v += kStride) {
     const float* row = depth.ptr<float>(v);
@@ -131,7 +132,8 @@ std::vector<Eigen::Vector3i> DepthFusion::Fuse(const cv::Mat& grey, const cv::Ma
         "DepthFusion: an 8-bit grey image and a float depth image of the camera's size expected");
   }
   const int resolution = options_.block_resolution;
-  const std::int64_t voxels_per_block = static_cast<std::int64_t>(resolution) * resolution * resolution;
+  const std::int64_t voxels_per_block =
+      static_cast<std::int64_t>(resolution) * resolution * resolution;
   o3c::HashMap map = volume_->map();
   const std::vector<Eigen::Vector3i> near_surface =
       blocks == nullptr ? BlocksNearSurface(depth, T_world_camera) : std::vector<Eigen::Vector3i>();
@@ -187,7 +189,8 @@ std::vector<Eigen::Vector3i> DepthFusion::Fuse(const cv::Mat& grey, const cv::Ma
 }
 
 std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
-    open3d::core::HashMap& map, const cv::Mat& depth, const Eigen::Isometry3d& T_camera_world) const {
+    open3d::core::HashMap& map, const cv::Mat& depth,
+    const Eigen::Isometry3d& T_camera_world) const {
   // The farthest measured depth in every tile of kTile x kTile pixels (0 where none): a block is
   // updated only if some pixel of its image footprint measured a surface no nearer than the
   // block's front minus the band. Blocks behind every measurement or where nothing was measured
@@ -198,7 +201,8 @@ std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
   for (int v = 0; v < depth.rows; ++v) {
     const float* row = depth.ptr<float>(v);
     float* tile_row = farthest.ptr<float>(v / kTile);
-    for (int u = 0; u < depth.cols; ++u) tile_row[u / kTile] = std::max(tile_row[u / kTile], row[u]);
+    for (int u = 0; u < depth.cols; ++u)
+      tile_row[u / kTile] = std::max(tile_row[u / kTile], row[u]);
   }
   const o3c::Tensor active = map.GetActiveIndices();
   const o3c::Tensor keys = map.GetKeyTensor();
@@ -236,11 +240,12 @@ std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
   return visible;
 }
 
-void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block,
-                              int buffer_index, double sign) const {
+void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block, int buffer_index,
+                              double sign) const {
   const int resolution = options_.block_resolution;
   const double voxel = options_.voxel_size;
-  const std::size_t first = static_cast<std::size_t>(buffer_index) * resolution * resolution * resolution;
+  const std::size_t first =
+      static_cast<std::size_t>(buffer_index) * resolution * resolution * resolution;
   // Open3D's voxel (x, y, z) of block k lies at (k * resolution + (x, y, z)) * voxel_size, and
   // its index within the block is x + resolution * (y + resolution * z).
   const Eigen::Vector3d origin = block.cast<double>() * resolution * voxel;
@@ -256,7 +261,8 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         // Nearest pixel (floor of +0.5; the range check first keeps the cast defined).
         const double u_real = camera_.fx * p.x() * inverse_z + camera_.cx + 0.5;
         const double v_real = camera_.fy * p.y() * inverse_z + camera_.cy + 0.5;
-        if (!(u_real >= 0.0 && v_real >= 0.0 && u_real < view.depth.cols && v_real < view.depth.rows))
+        if (!(u_real >= 0.0 && v_real >= 0.0 && u_real < view.depth.cols &&
+              v_real < view.depth.rows))
           continue;
         const int u = static_cast<int>(u_real), v = static_cast<int>(v_real);
         const double measured = view.depth.ptr<float>(v)[u];
@@ -268,7 +274,8 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         if (distance < -options_.truncation) continue;
         const double tsdf = std::min(1.0, distance / options_.truncation);
         const double weight = sign * Weight(measured);
-        const std::size_t cell = first + static_cast<std::size_t>(x + resolution * (y + resolution * z));
+        const std::size_t cell =
+            first + static_cast<std::size_t>(x + resolution * (y + resolution * z));
         float& stored_tsdf = view.tsdf[cell];
         float& stored_weight = view.weight[cell];
         std::uint8_t& stored_grey = view.grey_levels[cell];
@@ -314,8 +321,7 @@ std::vector<float> DepthFusion::GreyAt(const std::vector<Eigen::Vector3d>& point
   voxels.reserve(points.size());
   for (const Eigen::Vector3d& point : points) {
     const Eigen::Vector3i voxel = (point / options_.voxel_size).array().round().cast<int>();
-    const Eigen::Vector3i block =
-        (voxel.cast<double>() / resolution).array().floor().cast<int>();
+    const Eigen::Vector3i block = (voxel.cast<double>() / resolution).array().floor().cast<int>();
     blocks.push_back(block);
     voxels.push_back(voxel - block * resolution);
   }
@@ -330,8 +336,9 @@ std::vector<float> DepthFusion::GreyAt(const std::vector<Eigen::Vector3d>& point
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!is_found[i]) continue;
     const Eigen::Vector3i& v = voxels[i];
-    const std::size_t cell = static_cast<std::size_t>(index[i]) * resolution * resolution * resolution +
-                             static_cast<std::size_t>(v.x() + resolution * (v.y() + resolution * v.z()));
+    const std::size_t cell =
+        static_cast<std::size_t>(index[i]) * resolution * resolution * resolution +
+        static_cast<std::size_t>(v.x() + resolution * (v.y() + resolution * v.z()));
     grey[i] = levels[cell] / 255.0f;
   }
   return grey;
@@ -341,7 +348,9 @@ namespace {
 
 // The summed inverse variance a voxel needs for its distance's standard deviation to be at most
 // `max_sigma`.
-float WeightThreshold(double max_sigma) { return static_cast<float>(1.0 / (max_sigma * max_sigma)); }
+float WeightThreshold(double max_sigma) {
+  return static_cast<float>(1.0 / (max_sigma * max_sigma));
+}
 
 }  // namespace
 
@@ -388,7 +397,8 @@ Mesh DepthFusion::ExtractMesh(double max_surface_sigma) const {
     throw;
   }
   weights[0] = first_weight;
-  if (!extracted.HasVertexPositions() || extracted.GetVertexPositions().GetLength() == 0) return mesh;
+  if (!extracted.HasVertexPositions() || extracted.GetVertexPositions().GetLength() == 0)
+    return mesh;
   mesh.vertices = Rows<double, Eigen::Vector3d>(extracted.GetVertexPositions());
   if (extracted.HasTriangleIndices())
     mesh.triangles = Rows<int, Eigen::Vector3i>(extracted.GetTriangleIndices());
@@ -399,9 +409,10 @@ Mesh DepthFusion::ExtractMesh(double max_surface_sigma) const {
 Cloud DepthFusion::ExtractCloud(double max_surface_sigma) const {
   Cloud cloud;
   if (volume_->map().Size() == 0) return cloud;
-  const open3d::t::geometry::PointCloud extracted =
-      EmptyIfNoSurface([&] { return volume_->grid.ExtractPointCloud(WeightThreshold(max_surface_sigma)); });
-  if (!extracted.HasPointPositions() || extracted.GetPointPositions().GetLength() == 0) return cloud;
+  const open3d::t::geometry::PointCloud extracted = EmptyIfNoSurface(
+      [&] { return volume_->grid.ExtractPointCloud(WeightThreshold(max_surface_sigma)); });
+  if (!extracted.HasPointPositions() || extracted.GetPointPositions().GetLength() == 0)
+    return cloud;
   cloud.points = Rows<double, Eigen::Vector3d>(extracted.GetPointPositions());
   if (extracted.HasPointNormals())
     cloud.normals = Rows<double, Eigen::Vector3d>(extracted.GetPointNormals());

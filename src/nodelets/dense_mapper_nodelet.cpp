@@ -86,13 +86,13 @@ DenseMapperParameters ReadParameters(const ros::NodeHandle& private_node) {
   if (p.queue_size < 1 || p.buffered_pairs < 1 || !(p.rate > 0) || !(p.cloud_cell >= 0) ||
       p.max_mesh_triangles < 1) {
     throw std::invalid_argument(
-        "~queue_size, ~buffered_pairs, ~rate and ~max_mesh_triangles must be > 0, ~cloud_cell >= 0");
+        "~queue_size, ~buffered_pairs, ~rate and ~max_mesh_triangles must be > 0, ~cloud_cell >= "
+        "0");
   }
   ros_parameters::RejectUnknownParameters(
-      private_node,
-      {"approximate_sync", "buffered_pairs", "calibration_file", "cloud_cell", "config_file",
-       "image_transport", "map_frame", "max_mesh_triangles", "queue_size", "rate", "save_mesh",
-       "use_camera_info"});
+      private_node, {"approximate_sync", "buffered_pairs", "calibration_file", "cloud_cell",
+                     "config_file", "image_transport", "map_frame", "max_mesh_triangles",
+                     "queue_size", "rate", "save_mesh", "use_camera_info"});
   return p;
 }
 
@@ -137,8 +137,8 @@ class DenseMapperNodelet : public nodelet::Nodelet {
 
   std::mutex mutex_;  // what the callbacks hand the worker
   std::condition_variable wake_;
-  std::optional<camera::StereoRectifier> rectifier_;  // set once (calibration)
-  std::deque<ros_wiring::ImagePair> pairs_;            // the latest pairs, by arrival
+  std::optional<camera::StereoRectifier> rectifier_;          // set once (calibration)
+  std::deque<ros_wiring::ImagePair> pairs_;                   // the latest pairs, by arrival
   std::deque<stereo_fabmap_slam::KeyframeConstPtr> waiting_;  // keyframes before their pair
   std::deque<Job> jobs_;
   stereo_fabmap_slam::MapGraphConstPtr graph_;
@@ -170,8 +170,8 @@ void DenseMapperNodelet::onInit() {
   if (!p.use_camera_info) {
     std::lock_guard<std::mutex> lock(mutex_);
     try {
-      Calibrate(ros_input::RigFromCalibrationFile(p.calibration_file, p.rectification,
-                                                  std::nullopt));
+      Calibrate(
+          ros_input::RigFromCalibrationFile(p.calibration_file, p.rectification, std::nullopt));
     } catch (const std::exception& error) {
       NODELET_FATAL_STREAM("calibration: " << error.what());
       throw;
@@ -298,8 +298,10 @@ void DenseMapperNodelet::Work() {
     if (graph) {
       T_map_odom = ros_conversions::FromTransformMessage(graph->map_to_odom);
       map_poses.clear();
-      for (std::size_t i = 0; i < graph->keyframe_ids.size() && i < graph->keyframe_poses.size(); ++i)
-        map_poses[graph->keyframe_ids[i]] = ros_conversions::FromPoseMessage(graph->keyframe_poses[i]);
+      for (std::size_t i = 0; i < graph->keyframe_ids.size() && i < graph->keyframe_poses.size();
+           ++i)
+        map_poses[graph->keyframe_ids[i]] =
+            ros_conversions::FromPoseMessage(graph->keyframe_poses[i]);
       moves_pending = true;
     }
     for (const Job& job : jobs) Fuse(job, T_map_odom, map_poses);
@@ -344,9 +346,8 @@ void DenseMapperNodelet::Fuse(const Job& job, const Eigen::Isometry3d& T_map_odo
   // until the graph has it.
   const auto in_map = map_poses.find(job.keyframe->id);
   const Eigen::Isometry3d T_map_camera =
-      in_map != map_poses.end()
-          ? in_map->second
-          : T_map_odom * ros_conversions::FromPoseMessage(job.keyframe->pose);
+      in_map != map_poses.end() ? in_map->second
+                                : T_map_odom * ros_conversions::FromPoseMessage(job.keyframe->pose);
   dense::KeyframeVolume::Timing timing;
   std::lock_guard<std::mutex> lock(volume_mutex_);
   if (!volume_ || !volume_->Add(job.keyframe->id, left, right, T_map_camera, &timing)) return;
@@ -354,10 +355,11 @@ void DenseMapperNodelet::Fuse(const Job& job, const Eigen::Isometry3d& T_map_odo
   fuse_ms_.push_back(timing.depth_ms + timing.fusion_ms);
   if (fuse_ms_.size() == 20) {
     std::sort(fuse_ms_.begin(), fuse_ms_.end());
-    NODELET_INFO("%zu keyframes fused (depth + fusion: median %.1f ms over the last 20), %zu "
-                 "blocks, %.0f MB",
-                 volume_->keyframes(), fuse_ms_[10], volume_->fusion().blocks(),
-                 volume_->memory_bytes() / 1048576.0);
+    NODELET_INFO(
+        "%zu keyframes fused (depth + fusion: median %.1f ms over the last 20), %zu "
+        "blocks, %.0f MB",
+        volume_->keyframes(), fuse_ms_[10], volume_->fusion().blocks(),
+        volume_->memory_bytes() / 1048576.0);
     fuse_ms_.clear();
   }
 }
@@ -415,7 +417,8 @@ bool DenseMapperNodelet::Save(const std::string& path, Extract extract, Write wr
     if (!volume_) throw std::runtime_error("not calibrated yet: no camera_info came");
     response->vertices = static_cast<std::uint32_t>(write(extract(*volume_), path));
     response->success = true;
-    response->message = "wrote " + path + " (" + std::to_string(volume_->keyframes()) + " keyframes)";
+    response->message =
+        "wrote " + path + " (" + std::to_string(volume_->keyframes()) + " keyframes)";
   } catch (const std::exception& error) {
     response->success = false;
     response->message = error.what();

@@ -15,7 +15,8 @@ namespace {
 // 5 cm).
 std::uint64_t CellKey(const Eigen::Vector3d& point, double cell) {
   const auto coordinate = [cell](double value) {
-    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(value / cell)) + (1 << 20)) &
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(value / cell)) +
+                                      (1 << 20)) &
            0x1FFFFF;
   };
   return coordinate(point.x()) << 42 | coordinate(point.y()) << 21 | coordinate(point.z());
@@ -34,10 +35,9 @@ sensor_msgs::PointCloud2 DenseCloudMessage(const dense::Cloud& cloud, double cel
   message.header.frame_id = frame;
   message.header.stamp = stamp;
   sensor_msgs::PointCloud2Modifier modifier(message);
-  modifier.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1,
-                                sensor_msgs::PointField::FLOAT32, "z", 1,
-                                sensor_msgs::PointField::FLOAT32, "intensity", 1,
-                                sensor_msgs::PointField::FLOAT32);
+  modifier.setPointCloud2Fields(
+      4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
+      sensor_msgs::PointField::FLOAT32, "intensity", 1, sensor_msgs::PointField::FLOAT32);
   modifier.resize(kept.size());
   sensor_msgs::PointCloud2Iterator<float> x(message, "x"), y(message, "y"), z(message, "z"),
       intensity(message, "intensity");

@@ -88,7 +88,8 @@ std::vector<Eigen::Vector3d> SeenSurface(const datasets::HallScene& scene,
         const Eigen::Vector3f ray(static_cast<float>((u - camera.cx) / camera.fx),
                                   static_cast<float>((v - camera.cy) / camera.fy), 1.0f);
         const float distance = scene.Distance(origin, (rotation * ray).normalized());
-        if (!(distance > 0.0f) || distance / ray.norm() > max_depth) continue;  // z = distance * cos
+        if (!(distance > 0.0f) || distance / ray.norm() > max_depth)
+          continue;  // z = distance * cos
         seen.push_back((origin + distance * (rotation * ray).normalized()).cast<double>());
       }
     }
@@ -102,11 +103,12 @@ void DrawPicture(const std::vector<Eigen::Vector3d>& points, const std::vector<d
                  const std::vector<Eigen::Vector3d>& keyframes, double radius,
                  const std::string& title, const std::string& path) {
   constexpr int kBins = 5;
-  const cv::Scalar colours[kBins] = {{255, 0, 0}, {255, 200, 0}, {0, 200, 0}, {0, 200, 255},
-                                     {0, 0, 255}};  // BGR
+  const cv::Scalar colours[kBins] = {
+      {255, 0, 0}, {255, 200, 0}, {0, 200, 0}, {0, 200, 255}, {0, 0, 255}};  // BGR
   std::vector<std::vector<Eigen::Vector3d>> binned(kBins);
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const int bin = std::min(kBins - 1, static_cast<int>(distances[i] / (2.0 * radius) * (kBins - 1)));
+    const int bin =
+        std::min(kBins - 1, static_cast<int>(distances[i] / (2.0 * radius) * (kBins - 1)));
     binned[static_cast<std::size_t>(bin)].push_back(points[i]);
   }
   // The worst first: later layers cover earlier ones, and where good and bad surfaces lie above
@@ -165,8 +167,8 @@ int main(int argc, char** argv) {
     if (const auto run_dir = args->Value("run")) {
       rectifier.emplace(
           camera::StereoRectifier::FromCalibration(camera::ReadStereoCalibrationYaml(calibration)));
-      const std::string gt = sequence ? *sequence + "/mav0/state_groundtruth_estimate0/data.csv"
-                                      : *args->Value("gt");
+      const std::string gt =
+          sequence ? *sequence + "/mav0/state_groundtruth_estimate0/data.csv" : *args->Value("gt");
       run = AlignRun(*run_dir, gt, *rectifier);
       for (Eigen::Vector3d& point : points) point = run->alignment * point;
     }
@@ -184,11 +186,12 @@ int main(int argc, char** argv) {
     }
     const double median = dense::Quantile(distances, 0.5), p90 = dense::Quantile(distances, 0.9);
     const bool has_completeness = !reference.empty();
-    const double completeness = has_completeness ? dense::Completeness(points, reference, radius) : 0.0;
+    const double completeness =
+        has_completeness ? dense::Completeness(points, reference, radius) : 0.0;
 
     if (args->Flag("json")) {
-      std::printf("{\"points\": %zu, \"accuracy_median\": %.6f, \"accuracy_p90\": %.6f", points.size(),
-                  median, p90);
+      std::printf("{\"points\": %zu, \"accuracy_median\": %.6f, \"accuracy_p90\": %.6f",
+                  points.size(), median, p90);
       if (has_completeness)
         std::printf(", \"completeness\": %.6f, \"reference_points\": %zu, \"radius\": %.3f",
                     completeness, reference.size(), radius);
@@ -205,8 +208,9 @@ int main(int argc, char** argv) {
     }
     if (const auto picture = args->Value("picture")) {
       char title[160];
-      std::snprintf(title, sizeof(title), "distance to the reference: median %.1f cm, 90 %% %.1f cm",
-                    100 * median, 100 * p90);
+      std::snprintf(title, sizeof(title),
+                    "distance to the reference: median %.1f cm, 90 %% %.1f cm", 100 * median,
+                    100 * p90);
       DrawPicture(points, distances, run ? run->keyframes : std::vector<Eigen::Vector3d>{}, radius,
                   title, *picture);
     }

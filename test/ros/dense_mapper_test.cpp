@@ -35,8 +35,8 @@ TEST(DenseMapper, PublishesTheDenseMapAndSavesItAsPly) {
   std::string cloud_frame;
   ros::WallTime last_clock;
   ros::NodeHandle node;
-  const ros::Subscriber odometry_subscriber = node.subscribe<nav_msgs::Odometry>(
-      "/odometry", 1000, [&](const nav_msgs::OdometryConstPtr&) {
+  const ros::Subscriber odometry_subscriber =
+      node.subscribe<nav_msgs::Odometry>("/odometry", 1000, [&](const nav_msgs::OdometryConstPtr&) {
         std::lock_guard<std::mutex> lock(mutex);
         ++odometry;
       });
@@ -57,8 +57,8 @@ TEST(DenseMapper, PublishesTheDenseMapAndSavesItAsPly) {
 
   const std::string log_path = temp.path() + "/launch.log", pid_file = temp.path() + "/pid";
   ASSERT_EQ(std::system(("roslaunch --wait stereo_fabmap_slam euroc_bag.launch dense:=true "
-                         "visualizer:=false exit_at_end:=false bag:=" + bag + " > " + log_path +
-                         " 2>&1 & echo $! > " + pid_file)
+                         "visualizer:=false exit_at_end:=false bag:=" +
+                         bag + " > " + log_path + " 2>&1 & echo $! > " + pid_file)
                             .c_str()),
             0);
   const int launch_pid = std::stoi(ReadTextFile(pid_file));
@@ -99,10 +99,11 @@ TEST(DenseMapper, PublishesTheDenseMapAndSavesItAsPly) {
 
   const dense::Mesh mesh = dense::ReadMeshPly(save_mesh.request.path);
   const dense::Cloud cloud = dense::ReadCloudPly(save_cloud.request.path);
-  std::printf("odometry %zu of 200 pairs; %zu dense_cloud messages (last %zu points, frame %s); "
-              "mesh %zu vertices, %zu triangles; cloud %zu points\n",
-              odometry, cloud_messages, cloud_points, cloud_frame.c_str(), mesh.vertices.size(),
-              mesh.triangles.size(), cloud.points.size());
+  std::printf(
+      "odometry %zu of 200 pairs; %zu dense_cloud messages (last %zu points, frame %s); "
+      "mesh %zu vertices, %zu triangles; cloud %zu points\n",
+      odometry, cloud_messages, cloud_points, cloud_frame.c_str(), mesh.vertices.size(),
+      mesh.triangles.size(), cloud.points.size());
   RecordProperty("mesh_vertices", static_cast<int>(mesh.vertices.size()));
   // The files hold what the services said they wrote.
   EXPECT_EQ(mesh.vertices.size(), save_mesh.response.vertices);

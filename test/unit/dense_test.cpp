@@ -99,7 +99,6 @@ datasets::HallScene* StereoDepthOnTheHall::scene_ = nullptr;
 camera::StereoCalibration* StereoDepthOnTheHall::rig_ = nullptr;
 camera::StereoRectifier* StereoDepthOnTheHall::rectifier_ = nullptr;
 
-
 struct DisparityErrors {
   double coverage = 0;          // of the pixels whose exact depth lies within max_depth
   double median = 0;            // |disparity - exact disparity| [px], over pixels with depth
@@ -230,20 +229,21 @@ TEST_F(StereoDepthOnTheHall, FusedStereoDepthOfALapIsAccurateWhereItIsCertain) {
     for (int v = 0; v < camera.size.height; v += 8) {
       for (int u = 0; u < camera.size.width; u += 8) {
         const double z = pair.exact_depth.at<float>(v, u);
-        if (!(depth.at<float>(v, u) > 0.0f) || depth.at<float>(v, u) > allocation_depth ||
-            !(z > 0))
+        if (!(depth.at<float>(v, u) > 0.0f) || depth.at<float>(v, u) > allocation_depth || !(z > 0))
           continue;
         measured.push_back(RectifiedLeftPose(t) * Eigen::Vector3d((u - camera.cx) / camera.fx * z,
-                                                                  (v - camera.cy) / camera.fy * z, z));
+                                                                  (v - camera.cy) / camera.fy * z,
+                                                                  z));
       }
     }
   }
   const auto report = [&](const char* what, const Mesh& mesh) {
     const auto [median, p90] = MeshDistances(mesh, *scene_);
     const double complete = Completeness(mesh.vertices, measured, 0.05);
-    std::printf("%s: %zu vertices: median %.4f m, 90 %% %.4f m from the surface; %.3f of the "
-                "measured surface within 5 cm\n",
-                what, mesh.vertices.size(), median, p90, complete);
+    std::printf(
+        "%s: %zu vertices: median %.4f m, 90 %% %.4f m from the surface; %.3f of the "
+        "measured surface within 5 cm\n",
+        what, mesh.vertices.size(), median, p90, complete);
     return std::make_tuple(median, p90, complete);
   };
   std::printf("%zu blocks, %.0f MB\n", fusion.blocks(), fusion.memory_bytes() / 1e6);
@@ -309,7 +309,7 @@ TEST_F(StereoDepthOnTheHall, KeyframesMovedByLoopClosingAreFusedAgainAtTheirNewP
   Eigen::Isometry3d nudged = RectifiedLeftPose(2.0);
   nudged.translation().x() += 0.001;
   const std::map<std::uint64_t, Eigen::Isometry3d> corrected = {{1, nudged},
-                                                                 {2, RectifiedLeftPose(3.0)}};
+                                                                {2, RectifiedLeftPose(3.0)}};
   EXPECT_EQ(moved.Moving(corrected), 1u);
   EXPECT_EQ(moved.Move(corrected, 0), 0u);  // none this round
   EXPECT_EQ(moved.Move(corrected), 1u);
@@ -325,8 +325,8 @@ TEST_F(StereoDepthOnTheHall, KeyframesMovedByLoopClosingAreFusedAgainAtTheirNewP
   ASSERT_FALSE(expected.vertices.empty());
   // The same surface to within rounding: depth kept in millimetres, and sums of float weights
   // taken out and put back (the vertex count within 1 %, the distances within 1 mm).
-  EXPECT_NEAR(static_cast<double>(after.vertices.size()), static_cast<double>(expected.vertices.size()),
-              0.01 * expected.vertices.size());
+  EXPECT_NEAR(static_cast<double>(after.vertices.size()),
+              static_cast<double>(expected.vertices.size()), 0.01 * expected.vertices.size());
   EXPECT_NEAR(p90_after, p90_expected, 0.001);
   EXPECT_NEAR(median_after, median_expected, 0.001);
 }
@@ -337,7 +337,8 @@ TEST_F(StereoDepthOnTheHall, DeintegratingEveryViewEmptiesTheVolume) {
   DepthFusion fusion(options, rectifier_->camera());
   const RenderedPair pair = Render(5.0);
   const cv::Mat depth = ExactDepthWithin(pair, 4.0);
-  const std::vector<Eigen::Vector3i> updated = fusion.Integrate(pair.left, depth, RectifiedLeftPose(5.0));
+  const std::vector<Eigen::Vector3i> updated =
+      fusion.Integrate(pair.left, depth, RectifiedLeftPose(5.0));
   ASSERT_GT(fusion.ExtractMesh().vertices.size(), 1000u);
   fusion.Deintegrate(pair.left, depth, RectifiedLeftPose(5.0), updated);
   EXPECT_EQ(fusion.ExtractMesh().vertices.size(), 0u);
@@ -361,8 +362,8 @@ TEST_F(StereoDepthOnTheHall, TakingAViewOutLeavesBlocksAllocatedAfterItAsTheyWer
   ASSERT_GT(expected.vertices.size(), 1000u);
   // The same surface to within float rounding of the weights taken out (vertex count within
   // 1 %, distances between the meshes' vertices under a millimetre).
-  EXPECT_NEAR(static_cast<double>(left.vertices.size()), static_cast<double>(expected.vertices.size()),
-              0.01 * expected.vertices.size());
+  EXPECT_NEAR(static_cast<double>(left.vertices.size()),
+              static_cast<double>(expected.vertices.size()), 0.01 * expected.vertices.size());
   EXPECT_LT(Quantile(NearestDistances(left.vertices, expected.vertices), 0.99), 0.001);
 }
 

@@ -17,8 +17,8 @@ TEST(EvaluateReconstruction, RenderedLoopMeshLiesOnTheHallAndCoversWhatTheKeyfra
   const std::string sequence = SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, "loop", 34, 1);
   ASSERT_FALSE(sequence.empty());
   std::string output;
-  ASSERT_EQ(RunCommand(std::string(RUN_DATASET_BIN) + " " + sequence + " --quiet --dense --output " +
-                           temp.path() + "/run 2>&1",
+  ASSERT_EQ(RunCommand(std::string(RUN_DATASET_BIN) + " " + sequence +
+                           " --quiet --dense --output " + temp.path() + "/run 2>&1",
                        &output),
             0)
       << output;
@@ -49,16 +49,16 @@ TEST(EvaluateReconstruction, RenderedLoopMeshLiesOnTheHallAndCoversWhatTheKeyfra
 
 TEST(EvaluateReconstruction, ABadCommandLineIsRefused) {
   std::string output;
-  EXPECT_EQ(RunCommand(std::string(EVALUATE_RECONSTRUCTION_BIN) + " 2>&1", &output), 2)
-      << output;
+  EXPECT_EQ(RunCommand(std::string(EVALUATE_RECONSTRUCTION_BIN) + " 2>&1", &output), 2) << output;
   EXPECT_EQ(RunCommand(std::string(EVALUATE_RECONSTRUCTION_BIN) +
                            " a.ply --sequence s --reference r.ply 2>&1",
                        &output),
             2)
       << output;
-  EXPECT_EQ(RunCommand(std::string(EVALUATE_RECONSTRUCTION_BIN) + " /no/such.ply --reference r.ply 2>&1",
-                       &output),
-            1)
+  EXPECT_EQ(
+      RunCommand(std::string(EVALUATE_RECONSTRUCTION_BIN) + " /no/such.ply --reference r.ply 2>&1",
+                 &output),
+      1)
       << output;
 }
 

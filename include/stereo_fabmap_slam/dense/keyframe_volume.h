@@ -16,9 +16,10 @@
 namespace stereo_fabmap_slam::dense {
 
 // The dense map of a keyframe map: each keyframe's stereo depth fused at its map pose, and kept
-// (grey image and depth, 3 bytes a pixel, and the blocks it updated) so that when loop closing moves the keyframe its
-// depth is taken out at the old pose and put back at the new one. What the DenseMapper nodelet
-// runs in its own thread, and run_dataset --dense after the run. Not thread-safe.
+// (grey image and depth, 3 bytes a pixel, and the blocks it updated) so that when loop closing
+// moves the keyframe its depth is taken out at the old pose and put back at the new one. What the
+// DenseMapper nodelet runs in its own thread, and run_dataset --dense after the run. Not
+// thread-safe.
 class KeyframeVolume {
  public:
   struct Timing {
@@ -53,7 +54,7 @@ class KeyframeVolume {
 
  private:
   struct Kept {
-    cv::Mat grey;   // CV_8U, the rectified left image
+    cv::Mat grey;      // CV_8U, the rectified left image
     cv::Mat depth_mm;  // CV_16U [mm]: what was integrated (0.5 mm of rounding, far below the noise)
     Eigen::Isometry3d T_map_camera;
     std::vector<Eigen::Vector3i> blocks;  // those its integration updated (12 bytes each)
