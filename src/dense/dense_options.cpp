@@ -63,4 +63,15 @@ void FusionOptions::Validate() const {
     throw std::invalid_argument(section + "max_allocation_sigma must be > 0");
 }
 
+void DenseMappingOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("buffered_pairs", &buffered_pairs);
+  visitor.Visit("moves_per_step", &moves_per_step);
+}
+
+void DenseMappingOptions::Validate() const {
+  const std::string section = std::string(kSection) + ".";
+  if (buffered_pairs < 1 || moves_per_step < 1)
+    throw std::invalid_argument(section + "buffered_pairs and moves_per_step must be at least 1");
+}
+
 }  // namespace stereo_fabmap_slam::dense

@@ -26,12 +26,11 @@ cv::Mat Metres(const cv::Mat& millimetres) {
 
 KeyframeVolume::KeyframeVolume(const StereoDepthOptions& depth_options,
                                const FusionOptions& fusion_options,
-                               const geometry::StereoCamera& camera, bool keep_views)
+                               const geometry::StereoCamera& camera)
     : stereo_(depth_options, camera),
       fusion_(fusion_options, camera),
       voxel_size_(fusion_options.voxel_size),
-      max_depth_(depth_options.max_depth),
-      keep_views_(keep_views) {}
+      max_depth_(depth_options.max_depth) {}
 
 bool KeyframeVolume::Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& right,
                          const Eigen::Isometry3d& T_map_camera, Timing* timing) {
@@ -43,7 +42,6 @@ bool KeyframeVolume::Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& r
   const auto fusion_start = std::chrono::steady_clock::now();
   kept.blocks = fusion_.Integrate(kept.grey, Metres(kept.depth_mm), T_map_camera);
   if (timing != nullptr) *timing = Timing{depth_ms, Milliseconds(fusion_start)};
-  if (!keep_views_) kept = Kept{cv::Mat(), cv::Mat(), T_map_camera, {}};
   kept_.emplace(id, std::move(kept));
   return true;
 }
@@ -58,9 +56,7 @@ std::size_t KeyframeVolume::Moving(const std::map<std::uint64_t, Eigen::Isometry
   std::size_t moving = 0;
   for (const auto& [id, kept] : kept_) {
     const auto pose = poses.find(id);
-    if (!kept.grey.empty() && pose != poses.end() &&
-        Shift(kept.T_map_camera, pose->second) > 0.5 * voxel_size_)
-      ++moving;
+    if (pose != poses.end() && Shift(kept.T_map_camera, pose->second) > 0.5 * voxel_size_) ++moving;
   }
   return moving;
 }
@@ -70,7 +66,7 @@ std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d
   std::vector<std::pair<double, std::uint64_t>> shifts;  // (shift, id)
   for (const auto& [id, kept] : kept_) {
     const auto pose = poses.find(id);
-    if (kept.grey.empty() || pose == poses.end()) continue;
+    if (pose == poses.end()) continue;
     const double shift = Shift(kept.T_map_camera, pose->second);
     if (shift > 0.5 * voxel_size_) shifts.emplace_back(shift, id);
   }

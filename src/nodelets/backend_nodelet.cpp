@@ -51,7 +51,7 @@ class BackendNodelet : public nodelet::Nodelet {
   ros::WallTimer tf_timer_;
   ros::Time last_tf_stamp_;                 // only the timer's thread touches it
   ros_wiring::TransformRepeater repeater_;  // map -> odom while the clock stands still
-  ros_wiring::ArrivalQueue inputs_;         // in the order they arrived: the stage takes them so
+  ros_wiring::BackendQueue inputs_;         // in the order they arrived: the stage takes them so
   std::thread worker_;
   std::mutex map_to_odom_mutex_;
   Eigen::Isometry3d map_to_odom_ = Eigen::Isometry3d::Identity();

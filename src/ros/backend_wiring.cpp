@@ -33,29 +33,4 @@ std_msgs::Header HeaderOf(const BackendInput& input) {
   return std_msgs::Header();
 }
 
-void ArrivalQueue::Push(BackendInput input) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    inputs_.push_back(std::move(input));
-  }
-  wake_.notify_one();
-}
-
-std::optional<std::deque<BackendInput>> ArrivalQueue::TakeAll() {
-  std::unique_lock<std::mutex> lock(mutex_);
-  wake_.wait(lock, [&] { return stopping_ || !inputs_.empty(); });
-  if (stopping_) return std::nullopt;
-  std::deque<BackendInput> waiting;
-  waiting.swap(inputs_);
-  return waiting;
-}
-
-void ArrivalQueue::Stop() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-}
-
 }  // namespace stereo_fabmap_slam::ros_wiring

@@ -4,10 +4,6 @@
 // is unit-tested: every input in the order it arrived, handed to the worker all at once, and
 // its conversion to the mapping stage's input. Nothing here decides anything about the map.
 
-#include <condition_variable>
-#include <deque>
-#include <mutex>
-#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -17,6 +13,7 @@
 #include <stereo_fabmap_slam/LoopEdge.h>
 #include <stereo_fabmap_slam/PlaceResult.h>
 
+#include "arrival_queue.h"
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 
 namespace stereo_fabmap_slam::ros_wiring {
@@ -36,21 +33,8 @@ pipeline::MappingInput ToMappingInput(const BackendInput& input);
 // A keyframe's header (its keyframe update carries it), else an empty one.
 std_msgs::Header HeaderOf(const BackendInput& input);
 
-// The inputs waiting for the worker, in arrival order. Never bounded by dropping: a keyframe
-// missing from the map would leave a hole in the graph; under load the stage adjusts the newest
-// of the waiting keyframes together (MappingStage::Take).
-class ArrivalQueue {
- public:
-  void Push(BackendInput input);
-  // Waits for inputs and returns all that wait; nullopt when stopping.
-  std::optional<std::deque<BackendInput>> TakeAll();
-  void Stop();
-
- private:
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::deque<BackendInput> inputs_;
-  bool stopping_ = false;
-};
+// The Backend worker's inputs. Under load the stage adjusts the newest of the waiting
+// keyframes together (MappingStage::Take).
+using BackendQueue = ArrivalQueue<BackendInput>;
 
 }  // namespace stereo_fabmap_slam::ros_wiring

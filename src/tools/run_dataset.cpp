@@ -10,6 +10,7 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
@@ -19,7 +20,7 @@
 #include "command_line.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/dense/keyframe_volume.h"
+#include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
 #include "stereo_fabmap_slam/dense/surface_comparison.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
@@ -42,8 +43,9 @@ constexpr char kUsage[] =
     "  loops.csv       every verified loop candidate, accepted or not, with the reason\n"
     "  timing.csv      milliseconds per frame and stage\n"
     "  summary.json    counts, times, and ATE against ground truth when the sequence has it\n"
-    "  mesh.ply, dense_cloud.ply  with --dense: every keyframe's stereo depth fused at its final\n"
-    "                  map pose (sections dense_depth, dense_fusion of the config), grey levels\n"
+    "  mesh.ply, dense_cloud.ply  with --dense: every keyframe's stereo depth fused at its map\n"
+    "                  pose during the run and again where the map moved it, as the DenseMapper\n"
+    "                  does (sections dense_depth, dense_fusion, dense_mapping of the config)\n"
     "--load-map starts from a map saved by --save-map (same vocabulary and camera); with\n"
     "--mode localization it is used without being extended: the camera is relocalized in it at\n"
     "start, after every loss and at each keyframe, and trajectory.txt is in the map's frame.\n"
@@ -82,50 +84,83 @@ double PeakResidentMegabytes() {
   return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
 }
 
-// The dense map: after the run, every keyframe's pair read again, its depth fused at the
-// keyframe's final pose (after loop closing: offline, nothing needs taking out again).
-void WriteDenseMap(const datasets::EurocSequence& sequence,
-                   const camera::StereoRectifier& rectifier,
-                   const tools::SlamConfiguration& options, const io::Trajectory& keyframes,
-                   const std::string& output, pipeline::JsonObject* summary) {
-  dense::KeyframeVolume volume(options.dense_depth, options.dense_fusion, rectifier.camera(),
-                               /*keep_views=*/false);
-  std::vector<double> depth_ms, fusion_ms;
-  std::size_t next = 0;  // keyframes and pairs are both in time order
-  for (const io::StampedPose& keyframe : keyframes) {
-    const auto stamp_ns = static_cast<std::int64_t>(std::llround(keyframe.timestamp * 1e9));
-    while (next < sequence.size() &&
-           sequence.frames()[next].timestamp_ns < stamp_ns - 1'000'000)  // 1 ms
-      ++next;
-    if (next == sequence.size()) break;
-    if (std::llabs(sequence.frames()[next].timestamp_ns - stamp_ns) > 1'000'000) continue;
-    const datasets::StereoImages images = sequence.LoadStereoPair(next);
-    cv::Mat left, right;
-    rectifier.Rectify(images.left, images.right, &left, &right);
-    dense::KeyframeVolume::Timing timing;
-    if (!volume.Add(next, left, right, keyframe.pose, &timing)) continue;
-    depth_ms.push_back(timing.depth_ms);
-    fusion_ms.push_back(timing.fusion_ms);
+// run_dataset --dense: the dense mapping stage beside the SLAM as the DenseMapper runs it in the
+// graph, in order: every pair and keyframe handed over as it comes, the map after every frame
+// that changed it, one step after each frame; at the end, steps until every keyframe the map
+// moved is fused at its final pose.
+class DenseRun {
+ public:
+  DenseRun(const tools::SlamConfiguration& options, const camera::StereoRectifier& rectifier,
+           bool quiet)
+      : stage_(options.dense_mapping, options.dense_depth, options.dense_fusion, rectifier),
+        quiet_(quiet) {}
+
+  void AfterFrame(const datasets::StereoImages& images, const pipeline::FrameRecord* frame,
+                  const pipeline::StereoSlam& slam) {
+    const double start = NowMs();
+    stage_.AddPair(dense::DenseStereoPair{images.timestamp_ns, images.left, images.right});
+    if (frame != nullptr && frame->is_keyframe) {
+      // The tracker's reference is the keyframe it has just made.
+      stage_.AddKeyframe(dense::DenseKeyframe{static_cast<std::uint64_t>(frame->reference_keyframe),
+                                              images.timestamp_ns, frame->T_world_camera});
+    }
+    // The map changes with a keyframe (bundle adjustment, a loop) or a relocalization's edge.
+    if (frame != nullptr && (frame->is_keyframe || frame->relocalized)) SetMap(slam);
+    Step();
+    ms_ += NowMs() - start;
   }
-  const dense::Mesh mesh = volume.ExtractMesh();
-  dense::WriteMeshPly(mesh, output + "/mesh.ply");
-  dense::WriteCloudPly(volume.ExtractCloud(), output + "/dense_cloud.ply");
-  const auto median = [](std::vector<double> values) {
-    if (values.empty()) return 0.0;
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    return values[values.size() / 2];
-  };
-  summary->Add("dense_keyframes", depth_ms.size());
-  summary->Add("dense_depth_ms_median", median(depth_ms), 3);
-  summary->Add("dense_fusion_ms_median", median(fusion_ms), 3);
-  summary->Add("dense_mesh_vertices", mesh.vertices.size());
-  summary->Add("dense_mesh_triangles", mesh.triangles.size());
-  const double area = dense::SurfaceArea(mesh.vertices, mesh.triangles);
-  summary->Add("dense_mesh_area_m2", area, 1);
-  summary->Add("dense_blocks", volume.fusion().blocks());
-  summary->Add("dense_volume_mb", volume.fusion().memory_bytes() / 1048576.0, 1);
-  summary->Add("dense_memory_mb", volume.memory_bytes() / 1048576.0, 1);
-}
+
+  void Finish(const pipeline::StereoSlam& slam) {
+    const double start = NowMs();
+    SetMap(slam);
+    do Step();
+    while (stage_.busy());
+    ms_ += NowMs() - start;
+  }
+
+  void Write(const std::string& output, pipeline::JsonObject* summary) const {
+    const dense::KeyframeVolume& volume = stage_.volume();
+    const dense::Mesh mesh = volume.ExtractMesh();
+    dense::WriteMeshPly(mesh, output + "/mesh.ply");
+    dense::WriteCloudPly(volume.ExtractCloud(), output + "/dense_cloud.ply");
+    summary->Add("dense_keyframes", depth_ms_.size());
+    summary->Add("dense_keyframes_moved", moved_);
+    summary->Add("dense_depth_ms_median", dense::Quantile(depth_ms_, 0.5), 3);
+    summary->Add("dense_fusion_ms_median", dense::Quantile(fusion_ms_, 0.5), 3);
+    summary->Add("dense_time_s", ms_ / 1000.0, 3);
+    summary->Add("dense_mesh_vertices", mesh.vertices.size());
+    summary->Add("dense_mesh_triangles", mesh.triangles.size());
+    summary->Add("dense_mesh_area_m2", dense::SurfaceArea(mesh.vertices, mesh.triangles), 1);
+    summary->Add("dense_blocks", volume.fusion().blocks());
+    summary->Add("dense_volume_mb", volume.fusion().memory_bytes() / 1048576.0, 1);
+    summary->Add("dense_memory_mb", volume.memory_bytes() / 1048576.0, 1);
+  }
+
+ private:
+  void SetMap(const pipeline::StereoSlam& slam) {
+    std::map<std::uint64_t, Eigen::Isometry3d> poses;
+    for (const auto& [id, pose] : slam.mapping().MapPoses())
+      poses.emplace(static_cast<std::uint64_t>(id), pose);
+    stage_.SetMap(slam.mapping().MapToOdom(), std::move(poses));
+  }
+
+  void Step() {
+    const dense::DenseStepReport report = stage_.Step();
+    for (const std::string& left_out : report.left_out)
+      if (!quiet_) std::fprintf(stderr, "dense map: %s\n", left_out.c_str());
+    for (const dense::DenseStepReport::Fused& fused : report.fused) {
+      depth_ms_.push_back(fused.timing.depth_ms);
+      fusion_ms_.push_back(fused.timing.fusion_ms);
+    }
+    moved_ += report.moved;
+  }
+
+  dense::DenseMappingStage stage_;
+  bool quiet_;
+  std::vector<double> depth_ms_, fusion_ms_;
+  std::size_t moved_ = 0;  // re-integrations at a pose the map moved
+  double ms_ = 0;          // all the dense mapping took
+};
 
 }  // namespace
 
@@ -213,6 +248,8 @@ int main(int argc, char** argv) {
       slam.SetMode(mode);
     }
     const std::size_t loaded_keyframes = slam.mapping().pose_graph().size();
+    std::optional<DenseRun> dense_run;
+    if (args->Flag("dense")) dense_run.emplace(options, rectifier, quiet);
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
@@ -228,6 +265,7 @@ int main(int argc, char** argv) {
       const pipeline::FrameRecord* frame =
           slam.ProcessFrame(images.timestamp_ns * 1e-9, images.left, images.right, skipped);
       processing_ms += NowMs() - start;
+      if (dense_run) dense_run->AfterFrame(images, frame, slam);
       // What the input monitor found (a gap, a frozen or wrongly sized image...).
       for (const pipeline::InputEvent& event : slam.last_input_events()) {
         if (!quiet)
@@ -267,8 +305,9 @@ int main(int argc, char** argv) {
     summary.Add("realtime_factor", duration / (processing_ms / 1000.0));
     summary.Add("peak_rss_mb", PeakResidentMegabytes(), 1);
     slam.record().Write(output, slam.map_state(), &summary);
-    if (args->Flag("dense")) {
-      WriteDenseMap(sequence, rectifier, options, slam.KeyframeTrajectory(), output, &summary);
+    if (dense_run) {
+      dense_run->Finish(slam);
+      dense_run->Write(output, &summary);
     }
     // Ground truth is the body frame: move it to the rectified left camera we estimate. The ATE
     // needs 3 poses matched to it; with fewer (a sequence of one or two frames, a map that never

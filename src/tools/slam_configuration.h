@@ -25,6 +25,7 @@ struct SlamConfiguration {
   relocalization::RelocalizerOptions relocalization;
   dense::StereoDepthOptions dense_depth;
   dense::FusionOptions dense_fusion;
+  dense::DenseMappingOptions dense_mapping;
 
   template <typename Visit>
   void ForEachModule(Visit visit) {
@@ -36,6 +37,7 @@ struct SlamConfiguration {
     visit(relocalization);
     visit(dense_depth);
     visit(dense_fusion);
+    visit(dense_mapping);
   }
 
   // Reads and validates every section; unknown sections and keys, and bad values, throw

@@ -3,8 +3,11 @@
 // (EuRoC's rig with its lens distortion, 2 grey levels of noise) and rectified as the SLAM does.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <map>
+#include <stdexcept>
+#include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -18,6 +21,7 @@
 #include "stereo_fabmap_slam/datasets/route.h"
 #include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 #include "stereo_fabmap_slam/datasets/texture_library.h"
+#include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
 #include "stereo_fabmap_slam/dense/depth_fusion.h"
 #include "stereo_fabmap_slam/dense/keyframe_volume.h"
 #include "stereo_fabmap_slam/dense/stereo_depth.h"
@@ -38,8 +42,9 @@ cv::Mat Develop(const cv::Mat& radiance, std::uint64_t seed) {
 }
 
 struct RenderedPair {
-  cv::Mat left, right;  // rectified
-  cv::Mat exact_depth;  // CV_32F [m] along the rectified left camera's axis
+  cv::Mat left_raw, right_raw;  // as the camera gives them
+  cv::Mat left, right;          // rectified
+  cv::Mat exact_depth;          // CV_32F [m] along the rectified left camera's axis
 };
 
 class StereoDepthOnTheHall : public ::testing::Test {
@@ -68,6 +73,8 @@ class StereoDepthOnTheHall : public ::testing::Test {
     const cv::Mat right_raw =
         Develop(right_renderer.Render(*scene_, T_world_body * rig_->right.T_body_camera), 2000 + t);
     RenderedPair pair;
+    pair.left_raw = left_raw;
+    pair.right_raw = right_raw;
     rectifier_->Rectify(left_raw, right_raw, &pair.left, &pair.right);
     const geometry::StereoCamera& camera = rectifier_->camera();
     const Eigen::Isometry3d T_world_left = T_world_body * rectifier_->T_body_rectified_left();
@@ -329,6 +336,104 @@ TEST_F(StereoDepthOnTheHall, KeyframesMovedByLoopClosingAreFusedAgainAtTheirNewP
               static_cast<double>(expected.vertices.size()), 0.01 * expected.vertices.size());
   EXPECT_NEAR(p90_after, p90_expected, 0.001);
   EXPECT_NEAR(median_after, median_expected, 0.001);
+}
+
+// The stage the DenseMapper and run_dataset --dense share: keyframes meet their pairs whichever
+// comes first, are fused at their odometry pose through map -> odom until the map has them, and
+// are moved where the map puts them, the one that moved most first, `moves_per_step` a step.
+TEST_F(StereoDepthOnTheHall, TheDenseMappingStageFusesKeyframesWithTheirPairsAndFollowsTheMap) {
+  DenseMappingOptions options;
+  options.buffered_pairs = 2;
+  options.moves_per_step = 1;
+  const StereoDepthOptions depth_options;
+  const FusionOptions fusion_options;
+  DenseMappingStage stage(options, depth_options, fusion_options, *rectifier_);
+  const RenderedPair first = Render(2.0), second = Render(3.0);
+  constexpr std::int64_t kFirst = 2'000'000'000, kSecond = 3'000'000'000;
+  // Odometry's drift: 5 and 15 cm.
+  Eigen::Isometry3d first_odom = RectifiedLeftPose(2.0), second_odom = RectifiedLeftPose(3.0);
+  first_odom.translation().x() += 0.05;
+  second_odom.translation() += Eigen::Vector3d(0.15, -0.15, 0.0);
+
+  stage.AddPair({kFirst, first.left_raw, first.right_raw});
+  EXPECT_FALSE(stage.busy()) << "a pair alone is no work";
+  stage.AddKeyframe({1, kFirst, first_odom});  // after its pair
+  EXPECT_TRUE(stage.busy());
+  DenseStepReport report = stage.Step();
+  ASSERT_EQ(report.fused.size(), 1u);
+  EXPECT_EQ(report.fused[0].id, 1u);
+  stage.AddKeyframe({2, kSecond, second_odom});  // before its pair
+  EXPECT_FALSE(stage.busy());
+  EXPECT_TRUE(stage.Step().fused.empty());
+  stage.AddPair({kSecond, second.left_raw, second.right_raw});
+  report = stage.Step();
+  ASSERT_EQ(report.fused.size(), 1u);
+  EXPECT_EQ(report.fused[0].id, 2u);
+  EXPECT_EQ(stage.volume().keyframes(), 2u);
+
+  // The map corrects both: keyframe 2, which moved most, first; one a step.
+  stage.SetMap(Eigen::Isometry3d::Identity(),
+               {{1, RectifiedLeftPose(2.0)}, {2, RectifiedLeftPose(3.0)}});
+  report = stage.Step();
+  EXPECT_EQ(report.moved, 1u);
+  EXPECT_EQ(report.still_moving, 1u);
+  EXPECT_TRUE(stage.busy());
+  report = stage.Step();
+  EXPECT_EQ(report.moved, 1u);
+  EXPECT_EQ(report.still_moving, 0u);
+  EXPECT_FALSE(stage.busy());
+  KeyframeVolume right_first_time(depth_options, fusion_options, rectifier_->camera());
+  right_first_time.Add(1, first.left, first.right, RectifiedLeftPose(2.0));
+  right_first_time.Add(2, second.left, second.right, RectifiedLeftPose(3.0));
+  const std::size_t vertices = stage.volume().ExtractMesh().vertices.size();
+  const std::size_t expected = right_first_time.ExtractMesh().vertices.size();
+  ASSERT_GT(expected, 0u);
+  // Within rounding (the test above): depth kept in millimetres, float weights out and in.
+  EXPECT_NEAR(static_cast<double>(vertices), static_cast<double>(expected), 0.01 * expected);
+
+  // A keyframe the map does not hold yet is fused at its odometry pose through map -> odom: once
+  // the map holds it there, it does not move.
+  const Eigen::Isometry3d T_map_odom(Eigen::Translation3d(0.3, -0.2, 0.0));
+  const Eigen::Isometry3d third_odom = T_map_odom.inverse() * RectifiedLeftPose(2.0);
+  stage.SetMap(T_map_odom, {{1, RectifiedLeftPose(2.0)}, {2, RectifiedLeftPose(3.0)}});
+  stage.AddPair({kFirst + 1, first.left_raw, first.right_raw});
+  stage.AddKeyframe({3, kFirst + 1, third_odom});
+  report = stage.Step();
+  ASSERT_EQ(report.fused.size(), 1u);
+  EXPECT_EQ(report.moved, 0u);
+  stage.SetMap(
+      T_map_odom,
+      {{1, RectifiedLeftPose(2.0)}, {2, RectifiedLeftPose(3.0)}, {3, RectifiedLeftPose(2.0)}});
+  EXPECT_EQ(stage.Step().moved, 0u);
+
+  // Only the latest pairs are kept, and as many waiting keyframes: one whose pair went, or never
+  // comes, is left out with a reason; so is one whose pair is not of the calibrated size.
+  for (std::int64_t stamp = 10; stamp < 13; ++stamp)
+    stage.AddPair({stamp, first.left_raw, first.right_raw});
+  stage.AddKeyframe({4, 10, first_odom});  // its pair went with the third
+  stage.AddKeyframe({5, 20, first_odom});
+  stage.AddKeyframe({6, 21, first_odom});  // the third waiting: keyframe 4 goes
+  report = stage.Step();
+  EXPECT_TRUE(report.fused.empty());
+  ASSERT_EQ(report.left_out.size(), 1u);
+  EXPECT_NE(report.left_out[0].find("keyframe 4"), std::string::npos) << report.left_out[0];
+  const cv::Mat small(100, 100, CV_8U, cv::Scalar(128));
+  stage.AddPair({20, small, small});
+  report = stage.Step();
+  EXPECT_TRUE(report.fused.empty());
+  ASSERT_EQ(report.left_out.size(), 1u);
+  EXPECT_NE(report.left_out[0].find("keyframe 5"), std::string::npos) << report.left_out[0];
+  EXPECT_EQ(stage.volume().keyframes(), 3u);
+}
+
+TEST(DenseMappingOptions, InvalidSettingsAreRefused) {
+  DenseMappingOptions options;
+  options.moves_per_step = 0;
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+  options = DenseMappingOptions();
+  options.buffered_pairs = 0;
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+  EXPECT_NO_THROW(DenseMappingOptions().Validate());
 }
 
 TEST_F(StereoDepthOnTheHall, DeintegratingEveryViewEmptiesTheVolume) {

@@ -2,6 +2,7 @@
 // the tracking thread accounts for every pair (tracked, refused or skipped), the LoopDetector's
 // pairing of keyframes with the Backend's answers in either order, and the relocalize service's
 // timeout.
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -161,7 +162,7 @@ TEST(TransformRepeater, TheLastTransformsAgainOnceAPeriodPassedWithoutNews) {
 
 // The Backend's inputs reach its stage in the order they arrived, all that waited at once.
 TEST(ArrivalQueue, HandsOverEverythingThatWaitedInArrivalOrder) {
-  ros_wiring::ArrivalQueue queue;
+  ros_wiring::BackendQueue queue;
   auto keyframe = boost::make_shared<stereo_fabmap_slam::Keyframe>();
   keyframe->header.stamp = ros::Time(12, 5);
   queue.Push(pipeline::SlamMode::kLocalization);
@@ -178,9 +179,18 @@ TEST(ArrivalQueue, HandsOverEverythingThatWaitedInArrivalOrder) {
   // A map file gone since the LoopDetector took it: the Backend logs and skips the input.
   EXPECT_THROW(ros_wiring::ToMappingInput((*waiting)[2]), std::exception);
   // Stopping wakes a worker that waits.
+  // A timed wait returns what waits, nothing after the timeout.
+  queue.Push(pipeline::SlamMode::kMapping);
+  const auto timed = queue.TakeAll(std::chrono::milliseconds(0));
+  ASSERT_TRUE(timed.has_value());
+  EXPECT_EQ(timed->size(), 1u);
+  const auto nothing = queue.TakeAll(std::chrono::milliseconds(1));
+  ASSERT_TRUE(nothing.has_value());
+  EXPECT_TRUE(nothing->empty());
   std::thread worker([&] { EXPECT_FALSE(queue.TakeAll().has_value()); });
   queue.Stop();
   worker.join();
+  EXPECT_FALSE(queue.TakeAll(std::chrono::seconds(1)).has_value()) << "stopped: no wait";
 }
 
 }  // namespace

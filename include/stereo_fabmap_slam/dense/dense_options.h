@@ -76,4 +76,22 @@ struct FusionOptions {
   void Validate() const;  // throws std::invalid_argument
 };
 
+// How the dense mapping stage (DenseMappingStage) schedules its work.
+struct DenseMappingOptions {
+  static constexpr char kSection[] = "dense_mapping";
+
+  // Stereo pairs kept to find a keyframe's, and keyframes kept waiting for theirs: in the graph
+  // the tracker publishes a keyframe after it has tracked its pair, at most its queue (a few
+  // pairs) behind. 100 pairs are 5 s at EuRoC's 20 Hz, 72 MB at 752 x 480.
+  int buffered_pairs = 100;
+  // After a loop closes, every map update moves most keyframes a little: fused again all at once
+  // they kept the DenseMapper minutes behind the new keyframes on the demo's loop. So each step
+  // fuses the new keyframes first, then at most this many moved ones (those that moved most):
+  // 4 is about a keyframe period's work beside the tracker (70-100 ms each on two cores).
+  int moves_per_step = 4;
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;  // throws std::invalid_argument
+};
+
 }  // namespace stereo_fabmap_slam::dense

@@ -70,6 +70,7 @@ class DepthFusion {
   // Blocks of voxels allocated so far, and their memory [bytes]: what grows with the surface.
   std::size_t blocks() const;
   std::size_t memory_bytes() const;
+  const FusionOptions& options() const { return options_; }
 
  private:
   struct Volume;    // Open3D's grid

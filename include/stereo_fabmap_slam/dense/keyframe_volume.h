@@ -18,8 +18,7 @@ namespace stereo_fabmap_slam::dense {
 // The dense map of a keyframe map: each keyframe's stereo depth fused at its map pose, and kept
 // (grey image and depth, 3 bytes a pixel, and the blocks it updated) so that when loop closing
 // moves the keyframe its depth is taken out at the old pose and put back at the new one. What the
-// DenseMapper nodelet runs in its own thread, and run_dataset --dense after the run. Not
-// thread-safe.
+// dense mapping stage (DenseMappingStage) fuses into. Not thread-safe.
 class KeyframeVolume {
  public:
   struct Timing {
@@ -27,20 +26,19 @@ class KeyframeVolume {
     double fusion_ms = 0;  // integration into the volume
   };
 
-  // Throws std::invalid_argument for invalid options. `keep_views` false: nothing is kept, and
-  // keyframes cannot be moved (offline, after the run, poses are final).
+  // Throws std::invalid_argument for invalid options.
   KeyframeVolume(const StereoDepthOptions& depth_options, const FusionOptions& fusion_options,
-                 const geometry::StereoCamera& camera, bool keep_views = true);
+                 const geometry::StereoCamera& camera);
 
   // The keyframe's rectified pair, its depth fused at `T_map_camera` (the rectified left camera
   // in the map). A keyframe added before is left as it is (false).
   bool Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& right,
            const Eigen::Isometry3d& T_map_camera, Timing* timing = nullptr);
-  // Every kept keyframe of `poses` whose pose moved so far that its surface would shift by half
+  // Every keyframe of `poses` whose pose moved so far that its surface would shift by half
   // a voxel at the depth limit is taken out at its old pose and put back at the new one, those
   // that moved most first, at most `max_keyframes` of them; keyframes `poses` lacks stay.
-  // Returns how many moved (none without keep_views); call again with the same poses for the
-  // rest (Moving() says how many are left).
+  // Returns how many moved; call again with the same poses for the rest (Moving() says how many
+  // are left).
   std::size_t Move(const std::map<std::uint64_t, Eigen::Isometry3d>& poses,
                    std::size_t max_keyframes = static_cast<std::size_t>(-1));
   std::size_t Moving(const std::map<std::uint64_t, Eigen::Isometry3d>& poses) const;
@@ -65,7 +63,6 @@ class KeyframeVolume {
   StereoDepth stereo_;
   DepthFusion fusion_;
   double voxel_size_, max_depth_;
-  bool keep_views_;
   std::map<std::uint64_t, Kept> kept_;
 };
 

@@ -1,0 +1,104 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/dense/dense_options.h"
+#include "stereo_fabmap_slam/dense/keyframe_volume.h"
+
+namespace stereo_fabmap_slam::dense {
+
+// A raw (unrectified) mono8 stereo pair of the calibrated size, by its stamp. The stage keeps
+// the images: they must own their data (a copy of a message's, not a view of it).
+struct DenseStereoPair {
+  std::int64_t stamp_ns = 0;
+  cv::Mat left, right;
+};
+
+// A keyframe as the tracker made it: its id, the stamp of its pair and its odometry pose (the
+// rectified left camera in odom).
+struct DenseKeyframe {
+  std::uint64_t id = 0;
+  std::int64_t stamp_ns = 0;
+  Eigen::Isometry3d T_odom_camera = Eigen::Isometry3d::Identity();
+};
+
+// What one Step did.
+struct DenseStepReport {
+  struct Fused {
+    std::uint64_t id = 0;
+    KeyframeVolume::Timing timing;
+  };
+  std::vector<Fused> fused;  // new keyframes, in the order they came
+  // Keyframes left out of the dense map, and why (their pair never came while the stage kept
+  // pairs, or it was not of the calibrated size).
+  std::vector<std::string> left_out;
+  std::size_t moved = 0;         // keyframes fused again where the map moved them
+  std::size_t still_moving = 0;  // keyframes the map moved that wait for a later step
+
+  bool changed() const { return !fused.empty() || moved > 0; }
+};
+
+// The dense mapping stage: what the DenseMapper nodelet runs in its worker thread and
+// run_dataset --dense after each frame (docs/architecture.md). Stereo pairs, keyframes and the
+// map's keyframe poses in; each keyframe is matched with its pair by stamp, its depth fused at
+// its map pose (dense::KeyframeVolume), and fused again when the map moves it. The policy of
+// what comes first lives here, so the graph and the offline runner make the same map: new
+// keyframes are fused in the step after they and their pair came, then at most
+// `moves_per_step` of the keyframes the map moved, those that moved most first, until none is
+// left. Not thread-safe: one thread calls it (the nodelet queues its callbacks' inputs).
+class DenseMappingStage {
+ public:
+  // Throws std::invalid_argument for invalid options.
+  DenseMappingStage(const DenseMappingOptions& options, const StereoDepthOptions& depth_options,
+                    const FusionOptions& fusion_options, const camera::StereoRectifier& rectifier);
+
+  // The pairs, keyframes and map in the order they come; a keyframe may come before or after
+  // its pair. Only the latest `buffered_pairs` pairs and as many waiting keyframes are kept.
+  void AddPair(DenseStereoPair pair);
+  void AddKeyframe(const DenseKeyframe& keyframe);
+  // The map's state: map -> odom and the keyframes' map poses (those it holds; the others are
+  // fused at their odometry pose through map -> odom until the map has them).
+  void SetMap(const Eigen::Isometry3d& T_map_odom,
+              std::map<std::uint64_t, Eigen::Isometry3d> keyframe_poses);
+
+  // One round of work (see the class comment). Throws what Open3D throws (memory).
+  DenseStepReport Step();
+  // Whether a Step now would do something: a keyframe with its pair waits or the map moved
+  // keyframes that were not fused again yet.
+  bool busy() const { return !ready_.empty() || moves_pending_; }
+
+  const KeyframeVolume& volume() const { return volume_; }
+  // The mesh simplified until it has at most `max_triangles` (for a viewer: rviz draws
+  // 100,000 triangles smoothly); vertices merged per cube of twice the voxel, then doubled.
+  Mesh ViewerMesh(std::size_t max_triangles) const;
+
+ private:
+  struct Ready {
+    DenseKeyframe keyframe;
+    DenseStereoPair pair;
+  };
+  Eigen::Isometry3d MapPose(const DenseKeyframe& keyframe) const;
+  void Fuse(const Ready& ready, DenseStepReport* report);
+
+  DenseMappingOptions options_;
+  camera::StereoRectifier rectifier_;
+  KeyframeVolume volume_;
+  std::deque<DenseStereoPair> pairs_;  // the latest, by arrival
+  std::deque<DenseKeyframe> waiting_;  // keyframes before their pair
+  std::deque<Ready> ready_;            // keyframes with their pair, for the next step
+  std::vector<std::string> left_out_;  // since the last step
+  Eigen::Isometry3d T_map_odom_ = Eigen::Isometry3d::Identity();
+  std::map<std::uint64_t, Eigen::Isometry3d> map_poses_;
+  bool moves_pending_ = false;
+};
+
+}  // namespace stereo_fabmap_slam::dense

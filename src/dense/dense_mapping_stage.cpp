@@ -1,0 +1,102 @@
+#include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+
+#include "stereo_fabmap_slam/dense/mesh_simplification.h"
+
+namespace stereo_fabmap_slam::dense {
+
+DenseMappingStage::DenseMappingStage(const DenseMappingOptions& options,
+                                     const StereoDepthOptions& depth_options,
+                                     const FusionOptions& fusion_options,
+                                     const camera::StereoRectifier& rectifier)
+    : options_((options.Validate(), options)),
+      rectifier_(rectifier),
+      volume_(depth_options, fusion_options, rectifier.camera()) {}
+
+void DenseMappingStage::AddPair(DenseStereoPair pair) {
+  // A keyframe that came first takes its pair at once; the pairs wait for theirs.
+  const auto keyframe = std::find_if(waiting_.begin(), waiting_.end(), [&](const DenseKeyframe& k) {
+    return k.stamp_ns == pair.stamp_ns;
+  });
+  if (keyframe != waiting_.end()) {
+    ready_.push_back(Ready{*keyframe, std::move(pair)});
+    waiting_.erase(keyframe);
+    return;
+  }
+  pairs_.push_back(std::move(pair));
+  while (pairs_.size() > static_cast<std::size_t>(options_.buffered_pairs)) pairs_.pop_front();
+}
+
+void DenseMappingStage::AddKeyframe(const DenseKeyframe& keyframe) {
+  // The newest pairs first: a keyframe is made from one of the last few.
+  const auto pair = std::find_if(pairs_.rbegin(), pairs_.rend(), [&](const DenseStereoPair& p) {
+    return p.stamp_ns == keyframe.stamp_ns;
+  });
+  if (pair != pairs_.rend()) {
+    ready_.push_back(Ready{keyframe, *pair});  // cv::Mat shares the images
+    return;
+  }
+  waiting_.push_back(keyframe);
+  while (waiting_.size() > static_cast<std::size_t>(options_.buffered_pairs)) {
+    left_out_.push_back("keyframe " + std::to_string(waiting_.front().id) +
+                        ": its stereo pair did not come");
+    waiting_.pop_front();
+  }
+}
+
+void DenseMappingStage::SetMap(const Eigen::Isometry3d& T_map_odom,
+                               std::map<std::uint64_t, Eigen::Isometry3d> keyframe_poses) {
+  T_map_odom_ = T_map_odom;
+  map_poses_ = std::move(keyframe_poses);
+  moves_pending_ = true;  // Step finds out whether any keyframe moved far enough
+}
+
+Eigen::Isometry3d DenseMappingStage::MapPose(const DenseKeyframe& keyframe) const {
+  const auto in_map = map_poses_.find(keyframe.id);
+  return in_map != map_poses_.end() ? in_map->second : T_map_odom_ * keyframe.T_odom_camera;
+}
+
+void DenseMappingStage::Fuse(const Ready& ready, DenseStepReport* report) {
+  cv::Mat left, right;
+  try {
+    rectifier_.Rectify(ready.pair.left, ready.pair.right, &left, &right);
+  } catch (const std::invalid_argument& error) {  // not of the calibrated size
+    report->left_out.push_back("keyframe " + std::to_string(ready.keyframe.id) + ": " +
+                               error.what());
+    return;
+  }
+  DenseStepReport::Fused fused{ready.keyframe.id, {}};
+  if (volume_.Add(ready.keyframe.id, left, right, MapPose(ready.keyframe), &fused.timing))
+    report->fused.push_back(fused);
+}
+
+DenseStepReport DenseMappingStage::Step() {
+  DenseStepReport report;
+  report.left_out.swap(left_out_);
+  while (!ready_.empty()) {
+    const Ready ready = std::move(ready_.front());
+    ready_.pop_front();
+    Fuse(ready, &report);
+  }
+  if (moves_pending_) {
+    const auto most = static_cast<std::size_t>(options_.moves_per_step);
+    report.moved = volume_.Move(map_poses_, most);
+    report.still_moving = report.moved == most ? volume_.Moving(map_poses_) : 0;
+    moves_pending_ = report.still_moving > 0;
+  }
+  return report;
+}
+
+Mesh DenseMappingStage::ViewerMesh(std::size_t max_triangles) const {
+  Mesh mesh = volume_.ExtractMesh();
+  for (double cell = 2.0 * volume_.fusion().options().voxel_size;
+       mesh.triangles.size() > max_triangles; cell *= 2.0) {
+    mesh = SimplifiedMesh(mesh, cell);
+  }
+  return mesh;
+}
+
+}  // namespace stereo_fabmap_slam::dense
