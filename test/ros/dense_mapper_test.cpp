@@ -5,19 +5,16 @@
 //   checks the same files offline vertex by vertex; here: counts and bounds);
 // - the tracker keeps up beside it: odometry for at least 90 % of the pairs (the load test's
 //   bound for 1x, whose reasons hold here: skips on a shared machine are whole pairs).
-#include <signal.h>
-
-#include <cstdlib>
 #include <mutex>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
-#include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <stereo_fabmap_slam/SavePly.h>
 
+#include "background_launch.h"
 #include "euroc_bag_fixture.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
 #include "test_support.h"
@@ -33,7 +30,6 @@ TEST(DenseMapper, PublishesTheDenseMapAndSavesItAsPly) {
   std::mutex mutex;
   std::size_t odometry = 0, cloud_messages = 0, cloud_points = 0;
   std::string cloud_frame;
-  ros::WallTime last_clock;
   ros::NodeHandle node;
   const ros::Subscriber odometry_subscriber =
       node.subscribe<nav_msgs::Odometry>("/odometry", 1000, [&](const nav_msgs::OdometryConstPtr&) {
@@ -47,28 +43,17 @@ TEST(DenseMapper, PublishesTheDenseMapAndSavesItAsPly) {
         cloud_points = cloud->width * cloud->height;
         cloud_frame = cloud->header.frame_id;
       });
-  const ros::Subscriber clock_subscriber =
-      node.subscribe<rosgraph_msgs::Clock>("/clock", 10, [&](const rosgraph_msgs::ClockConstPtr&) {
-        std::lock_guard<std::mutex> lock(mutex);
-        last_clock = ros::WallTime::now();
-      });
   ros::AsyncSpinner spinner(2);
   spinner.start();
 
-  const std::string log_path = temp.path() + "/launch.log", pid_file = temp.path() + "/pid";
-  ASSERT_EQ(std::system(("roslaunch --wait stereo_fabmap_slam euroc_bag.launch dense:=true "
-                         "visualizer:=false exit_at_end:=false bag:=" +
-                         bag + " > " + log_path + " 2>&1 & echo $! > " + pid_file)
-                            .c_str()),
-            0);
-  const int launch_pid = std::stoi(ReadTextFile(pid_file));
-  // The bag has ended when its clock has been silent for a second.
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(120);
-  const auto bag_playing = [&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return last_clock.isZero() || ros::WallTime::now() - last_clock < ros::WallDuration(1.0);
-  };
-  while (bag_playing() && ros::WallTime::now() < deadline) ros::WallDuration(0.1).sleep();
+  const std::string log_path = temp.path() + "/launch.log";
+  BackgroundLaunch launch(node,
+                          "roslaunch --wait stereo_fabmap_slam euroc_bag.launch dense:=true "
+                          "visualizer:=false exit_at_end:=false bag:=" +
+                              bag,
+                          log_path);
+  ASSERT_TRUE(launch.started());
+  launch.WaitForTheBagToEnd();
 
   // The last keyframes' depth may still be on its way into the volume: the services take the
   // volume as it stands, so 3 s let the worker finish them (about 100 ms a keyframe beside the
@@ -83,8 +68,7 @@ TEST(DenseMapper, PublishesTheDenseMapAndSavesItAsPly) {
   bad_path.request.path = temp.path() + "/no/such/folder/mesh.ply";
   const bool bad_called = ros::service::call("/save_mesh", bad_path);
 
-  kill(launch_pid, SIGINT);
-  for (int i = 0; i < 300 && kill(launch_pid, 0) == 0; ++i) ros::WallDuration(0.1).sleep();
+  launch.Interrupt();
   spinner.stop();
   const std::string log = ReadTextFile(log_path);
   EXPECT_EQ(log.find("terminate called"), std::string::npos) << log;

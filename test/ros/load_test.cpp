@@ -10,10 +10,9 @@
 // - every nodelet standalone (its own process, messages serialised) gives the trajectory of
 //   the single manager;
 // - 2x and 10x (a second test): odometry to the end, whole pairs, no keyframe dropped.
-#include <signal.h>
-
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -26,13 +25,13 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
-#include <rosgraph_msgs/Clock.h>
 #include <stereo_fabmap_slam/DetectLoop.h>
 #include <stereo_fabmap_slam/Keyframe.h>
 #include <stereo_fabmap_slam/MapGraph.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "background_launch.h"
 #include "euroc_bag_fixture.h"
 #include "ros_conversions.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
@@ -118,7 +117,6 @@ GraphRun PlayBag(const std::string& bag, const std::string& arguments, const std
   std::mutex mutex;
   std::map<std::int64_t, Eigen::Isometry3d> odometry;
   std::set<std::uint64_t> keyframe_ids, graph_ids;
-  ros::WallTime last_clock;
   GraphRun run;
   ros::NodeHandle node;
   const ros::Subscriber odometry_subscriber = node.subscribe<nav_msgs::Odometry>(
@@ -141,31 +139,19 @@ GraphRun PlayBag(const std::string& bag, const std::string& arguments, const std
         graph_ids =
             std::set<std::uint64_t>(message->keyframe_ids.begin(), message->keyframe_ids.end());
       });
-  const ros::Subscriber clock_subscriber =
-      node.subscribe<rosgraph_msgs::Clock>("/clock", 10, [&](const rosgraph_msgs::ClockConstPtr&) {
-        std::lock_guard<std::mutex> lock(mutex);
-        last_clock = ros::WallTime::now();
-      });
   ros::AsyncSpinner spinner(2);
   spinner.start();
   const std::string launch =
       "roslaunch --wait stereo_fabmap_slam euroc_bag.launch "
       "visualizer:=false bag:=" +
-      bag + " " + arguments + " > " + log_path + " 2>&1";
+      bag + " " + arguments;
   int status = 0;
   if (!inspect) {
-    status = std::system((launch + " exit_at_end:=true").c_str());
+    status = std::system((launch + " exit_at_end:=true > " + log_path + " 2>&1").c_str());
   } else {
-    const std::string pid_file = log_path + ".pid";
-    status = std::system((launch + " exit_at_end:=false & echo $! > " + pid_file).c_str());
-    const int launch_pid = std::stoi(ReadTextFile(pid_file));
-    // The bag has ended when its clock has been silent for a second.
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(120);
-    const auto bag_playing = [&] {
-      std::lock_guard<std::mutex> lock(mutex);
-      return last_clock.isZero() || ros::WallTime::now() - last_clock < ros::WallDuration(1.0);
-    };
-    while (bag_playing() && ros::WallTime::now() < deadline) ros::WallDuration(0.1).sleep();
+    BackgroundLaunch background(node, launch + " exit_at_end:=false", log_path);
+    status = background.started() ? 0 : 1;
+    background.WaitForTheBagToEnd();
     InspectKeyframesKept(
         [&] {
           std::lock_guard<std::mutex> lock(mutex);
@@ -182,8 +168,7 @@ GraphRun PlayBag(const std::string& bag, const std::string& arguments, const std
           return odometry.empty() ? Eigen::Isometry3d::Identity() : odometry.rbegin()->second;
         }(),
         &run);
-    kill(launch_pid, SIGINT);
-    for (int i = 0; i < 300 && kill(launch_pid, 0) == 0; ++i) ros::WallDuration(0.1).sleep();
+    background.Interrupt();
   }
   ros::WallDuration(1.0).sleep();
   spinner.stop();
