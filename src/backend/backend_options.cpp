@@ -45,6 +45,10 @@ void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("iterations", &iterations);
   visitor.Visit("consistent_loop_chi2", &consistent_loop_chi2);
   visitor.Visit("local_keyframes", &local_keyframes);
+  visitor.Visit("gap_max_seconds", &gap_max_seconds);
+  visitor.Visit("gap_translation_sigma_per_second", &gap_translation_sigma_per_second);
+  visitor.Visit("gap_rotation_sigma_deg_per_second", &gap_rotation_sigma_deg_per_second);
+  visitor.Visit("gap_chi2", &gap_chi2);
 }
 
 void PoseGraphOptions::Validate() const {
@@ -60,6 +64,13 @@ void PoseGraphOptions::Validate() const {
     throw std::invalid_argument("pose_graph.local_keyframes must be >= 0, got " +
                                 std::to_string(local_keyframes));
   }
+  // gap_max_seconds 0 turns gaps off.
+  if (!(gap_max_seconds >= 0) || !std::isfinite(gap_max_seconds)) {
+    throw std::invalid_argument("pose_graph.gap_max_seconds must be a finite number >= 0");
+  }
+  RequirePositive("gap_translation_sigma_per_second", gap_translation_sigma_per_second);
+  RequirePositive("gap_rotation_sigma_deg_per_second", gap_rotation_sigma_deg_per_second);
+  RequirePositive("gap_chi2", gap_chi2);
 }
 
 }  // namespace stereo_fabmap_slam::backend

@@ -160,9 +160,16 @@ MappedKeyframe MappingStage::AddKeyframe(const map::Keyframe& keyframe,
       graph_.UpdateOdometryPose(id, pose);
     }
   }
+  // A tracking loss that the odometry bridged by its motion model; not a loaded map or the end
+  // of localization mode, after which the odometry has nothing to do with the keyframe before.
+  const bool after_loss = keyframe.starts_new_segment && !next_starts_new_segment_;
   mapped.starts_new_segment = keyframe.starts_new_segment || next_starts_new_segment_;
   next_starts_new_segment_ = false;
   graph_.AddKeyframe(keyframe.id, T_odom_camera, mapped.starts_new_segment);
+  if (after_loss && last_graph_keyframe_time_) {
+    graph_.AddGap(keyframe.id, keyframe.timestamp - *last_graph_keyframe_time_);
+  }
+  last_graph_keyframe_time_ = keyframe.timestamp;
   mapped.in_map_graph = true;
   start = clock_();
   if (AddReadyEdges()) {
@@ -247,6 +254,7 @@ void MappingStage::Load(const map::SavedMap& saved) {
   camera_ = saved.camera;  // keyframes of another camera are refused from now on
   localization_correction_.reset();
   next_starts_new_segment_ = true;
+  last_graph_keyframe_time_.reset();
   for (const map::SavedKeyframe& keyframe : saved.keyframes) {
     loaded_below_ = std::max(loaded_below_, keyframe.keyframe.id + 1);
   }

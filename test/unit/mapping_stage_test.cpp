@@ -5,6 +5,9 @@
 // pose graph's.
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 
+#include <algorithm>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "stereo_fabmap_slam/geometry/relative_pose_error.h"
@@ -108,6 +111,25 @@ TEST_F(MappingStageTest, LoopDetectionsCloseKeyframesAndKeyframesWithoutOneAreCl
   EXPECT_EQ(stage_.pose_graph().size(), 1u);
 }
 
+// A tracking loss that the odometry bridged (the tracker's keyframe starts a segment): the stage
+// gives the pose graph the loss's gap (0.5 s between the keyframes here), which joins it once a
+// loop closes the cycle through it. A segment the stage starts itself (after localization mode
+// or a loaded map, below) has no gap.
+TEST_F(MappingStageTest, ATrackingLossGivesThePoseGraphItsGap) {
+  for (std::int64_t id = 0; id < 3; ++id) stage_.AddKeyframe(Keyframe(id), kTestCamera);
+  stage_.AddKeyframe(Keyframe(3, true), kTestCamera);
+  stage_.AddKeyframe(Keyframe(4), kTestCamera);
+  EXPECT_FALSE(stage_.InMap(3));
+  stage_.AddEdge(Edge(1, 4, 0.3), backend::PoseGraphEdgeType::kLoop);  // the truth: 0.3 m
+  EXPECT_TRUE(stage_.InMap(3));
+  const std::vector<backend::PoseGraphEdge> edges = stage_.pose_graph().Edges();
+  const auto gaps = std::count_if(edges.begin(), edges.end(), [](const backend::PoseGraphEdge& e) {
+    return e.type == backend::PoseGraphEdgeType::kOdometry && e.from == 2 && e.to == 3;
+  });
+  EXPECT_EQ(gaps, 1);
+  EXPECT_EQ(stage_.LoopEdges().size(), 1u) << "a gap is no loop: maps do not save it";
+}
+
 TEST_F(MappingStageTest, LocalizationsMapToOdomIsTheTrackersAndMappingStartsASegmentAfter) {
   stage_.AddKeyframe(Keyframe(0), kTestCamera);
   stage_.SetMode(pipeline::SlamMode::kLocalization);
@@ -121,6 +143,10 @@ TEST_F(MappingStageTest, LocalizationsMapToOdomIsTheTrackersAndMappingStartsASeg
   EXPECT_TRUE(back.in_map_graph);
   EXPECT_TRUE(back.starts_new_segment) << "the keyframes in between are not in the graph";
   EXPECT_FALSE(stage_.InMap(2));
+  stage_.AddKeyframe(Keyframe(3), kTestCamera);
+  stage_.AddEdge(Edge(0, 3, 0.3), backend::PoseGraphEdgeType::kLoop);
+  for (const backend::PoseGraphEdge& edge : stage_.pose_graph().Edges())
+    EXPECT_FALSE(edge.from == 0 && edge.to == 2) << "no gap across localization mode";
 }
 
 TEST_F(MappingStageTest, ALoadedMapDropsOlderKeyframesAndTheNextStartsASegment) {

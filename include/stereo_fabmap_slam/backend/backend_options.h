@@ -55,6 +55,22 @@ struct PoseGraphOptions {
   // accuracy; the 10-minute rendered route of make bench-long: ATE 1.23 cm against 1.15 cm).
   // 0: every Optimize() optimises the whole graph.
   int local_keyframes = 200;
+  // A tracking loss's gap (PoseGraph::AddGap): the odometry went on by its motion model from the
+  // last keyframe before the loss to the first after it. Gaps longer than this [s] are left out:
+  // beyond a second the motion model guesses (and a camera carried elsewhere in the dark would
+  // be joined with an uncertainty too large for the check below to refuse it).
+  double gap_max_seconds = 1.0;
+  // The gap's standard deviation grows with its length: the odometry's per-edge sigmas plus
+  // these rates per second. A quarter of a walking speed (1 m/s) and 10 degrees a second bound
+  // how far the velocity and turn rate of a hand-held, walking or flying camera change within a
+  // second, which a constant-velocity model misses (a corridor end's turn: ~45 deg/s at most).
+  double gap_translation_sigma_per_second = 0.25;   // [m/s]
+  double gap_rotation_sigma_deg_per_second = 10.0;  // [deg/s]
+  // A gap joins the pose graph once a loop or relocalization joins its two segments' pieces, and
+  // stays only if, optimised with it, its squared whitened error is below this (16.8: the 99 %
+  // quantile of a 6-dof chi-square): what the motion model bridged agrees with the map. A
+  // kidnap (the camera jumped metres) is thousands of sigmas off and is taken out again.
+  double gap_chi2 = 16.8;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;

@@ -64,6 +64,19 @@ class PoseGraph {
   // would ignore it.
   // `type`: kLoop or kRelocalization (the same constraint; kept apart for display and counts).
   void AddLoop(const map::LoopEdge& loop, PoseGraphEdgeType type = PoseGraphEdgeType::kLoop);
+  // A tracking loss's gap: keyframe `to` starts a segment because tracking was lost, after the
+  // keyframe before it, `seconds` earlier; the odometry bridged the loss by its motion model, so
+  // the two odometry poses are related, more loosely than by tracking (the gap's uncertainty
+  // grows with `seconds`). Nothing joins the segments for it: relocalization and loops decide
+  // where the new segment is. Once they have joined the two pieces (directly, or through
+  // restarts of one keyframe between, each with its gap), the next Optimize() adds the gaps as
+  // edges and keeps them if the optimised map agrees with each (options.gap_chi2), so the new
+  // segment's start follows the motion model instead of hanging loose from the loop that joined
+  // it far later. A kidnap disagrees by metres and is taken out. A saved map keeps the poses,
+  // not the gaps (LoopEdges() holds loop and relocalization edges only). Gaps longer than
+  // options.gap_max_seconds are ignored; returns whether the gap was kept. Throws
+  // std::invalid_argument if `to` is unknown or does not start a segment after another keyframe.
+  bool AddGap(std::int64_t to, double seconds);
   // Sets a keyframe's map pose as a saved map had it (after AddKeyframe and AddLoop have rebuilt
   // the graph); throws for unknown ids.
   void RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera);
@@ -88,7 +101,8 @@ class PoseGraph {
   // T_map_odom: the correction of the newest keyframe, map pose * odom pose^-1, what a ROS
   // backend broadcasts as tf map -> odom. Identity while the graph is empty.
   Eigen::Isometry3d MapToOdom() const;
-  // Odometry edges (from the latest odometry poses), then loop edges (from: match, to: query).
+  // Odometry edges (from the latest odometry poses; gaps the map agreed with among them, with
+  // their own information), then loop edges (from: match, to: query).
   std::vector<PoseGraphEdge> Edges() const;
   std::size_t size() const { return keyframes_.size(); }
   std::int64_t last_id() const { return keyframes_.empty() ? -1 : keyframes_.back().id; }
@@ -113,6 +127,13 @@ class PoseGraph {
     Eigen::Matrix<double, 6, 6> sqrt_information;
     PoseGraphEdgeType type;
   };
+  // A tracking loss's gap, from the keyframe before the loss (index to - 1) to `to`.
+  struct Gap {
+    enum class State { kWaiting, kKept, kRefused };
+    std::size_t to;
+    Eigen::Matrix<double, 6, 6> information, sqrt_information;
+    State state = State::kWaiting;
+  };
   struct Segment {
     std::size_t first;  // index of its first keyframe
     // Union-find over segments: pieces are segments joined by loops. The root is the
@@ -127,6 +148,21 @@ class PoseGraph {
   int PieceOf(int segment) const;              // the root segment
   // The squared whitened error of a loop at the current map poses.
   double LoopChiSquare(const Loop& loop) const;
+  // A gap as an edge, from the latest odometry poses.
+  Loop GapEdge(const Gap& gap) const;
+  // Waiting gaps that lead from a piece with loops, through segments of one keyframe that are
+  // pieces of their own (a loss during which the odometry restarted several times), back into
+  // the same piece: a cycle that loops closed, to try at the next Optimize().
+  struct GapChain {
+    std::vector<std::size_t> gaps;  // indices into gaps_, in order
+    std::vector<int> segments;      // the segments between (may be none)
+    int piece;                      // the root segment of the piece at both ends
+  };
+  std::vector<GapChain> GapChainsToTry() const;
+  // Builds and solves the problem over the `moving` keyframes (the others held fixed), with the
+  // gaps kept and those `trying` (indices into gaps_); fills the result's counts and costs.
+  void Solve(const std::vector<bool>& moving, const std::vector<std::size_t>& trying,
+             PoseGraphSummary* result);
   // The options_.local_keyframes keyframes (by index) nearest the loops from index first_loop on,
   // in edges (odometry or loop), breadth first.
   std::vector<bool> WindowAroundLoops(std::size_t first_loop) const;
@@ -136,6 +172,7 @@ class PoseGraph {
   Eigen::Matrix<double, 6, 6> odometry_sqrt_information_;
   std::vector<Keyframe> keyframes_;  // by increasing id
   std::vector<Loop> loops_;
+  std::vector<Gap> gaps_;
   std::vector<Segment> segments_;
   std::size_t loops_optimised_ = 0;  // loops_[0, loops_optimised_) were in an Optimize()
   bool optimised_ = false;           // an Optimize() has run over every piece with loops

@@ -186,6 +186,8 @@ class MappingStage : public MapState {
   std::vector<std::string> refused_edges_;
   SlamMode mode_ = SlamMode::kMapping;
   bool next_starts_new_segment_ = false;  // after a load, and after localization mode
+  // The time of the graph's newest keyframe (this run's), for the gap of a tracking loss.
+  std::optional<double> last_graph_keyframe_time_;
   std::int64_t loaded_below_ = 0;
   std::optional<Eigen::Isometry3d> localization_correction_;  // localization mode's map -> odom
   std::int64_t last_closed_keyframe_ = -1;
