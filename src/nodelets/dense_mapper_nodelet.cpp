@@ -28,66 +28,11 @@
 
 #include "dense_messages.h"
 #include "dense_wiring.h"
-#include "parameter_reader.h"
 #include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
 #include "stereo_image_input.h"
 
 namespace stereo_fabmap_slam {
-namespace dense_mapper {
-
-struct DenseMapperParameters {
-  camera::RectificationOptions rectification;
-  dense::StereoDepthOptions depth;
-  dense::FusionOptions fusion;
-  dense::DenseMappingOptions mapping;
-  std::string calibration_file;
-  bool use_camera_info = false;
-  bool approximate_sync = false;
-  std::string map_frame = "map";
-  int queue_size = 10;
-  double rate = 0.5;         // [Hz] of dense_cloud and dense_mesh, when they changed
-  double cloud_cell = 0.05;  // [m] one point of dense_cloud a cube of this edge
-  // Triangles of dense_mesh at most (the mesh simplified until it fits): 100,000 are 12 MB a
-  // message.
-  int max_mesh_triangles = 100000;
-  std::string save_mesh;  // a PLY file the mesh is written to when the nodelet shuts down
-  std::string printed;
-};
-
-DenseMapperParameters ReadParameters(const ros::NodeHandle& private_node) {
-  DenseMapperParameters p;
-  p.rectification = ros_parameters::ReadModuleOptions(private_node, p.rectification);
-  p.depth = ros_parameters::ReadModuleOptions(private_node, p.depth);
-  p.fusion = ros_parameters::ReadModuleOptions(private_node, p.fusion);
-  p.mapping = ros_parameters::ReadModuleOptions(private_node, p.mapping);
-  p.printed = ros_parameters::PrintedOptions(p.rectification) +
-              ros_parameters::PrintedOptions(p.depth) + ros_parameters::PrintedOptions(p.fusion) +
-              ros_parameters::PrintedOptions(p.mapping);
-  p.use_camera_info = private_node.param("use_camera_info", p.use_camera_info);
-  if (!p.use_camera_info && !private_node.getParam("calibration_file", p.calibration_file)) {
-    throw std::invalid_argument("set ~calibration_file or ~use_camera_info");
-  }
-  p.approximate_sync = private_node.param("approximate_sync", p.approximate_sync);
-  p.map_frame = private_node.param("map_frame", p.map_frame);
-  p.queue_size = private_node.param("queue_size", p.queue_size);
-  p.rate = private_node.param("rate", p.rate);
-  p.cloud_cell = private_node.param("cloud_cell", p.cloud_cell);
-  p.max_mesh_triangles = private_node.param("max_mesh_triangles", p.max_mesh_triangles);
-  p.save_mesh = private_node.param("save_mesh", p.save_mesh);
-  if (p.queue_size < 1 || !(p.rate > 0) || !(p.cloud_cell >= 0) || p.max_mesh_triangles < 1) {
-    throw std::invalid_argument(
-        "~queue_size, ~rate and ~max_mesh_triangles must be > 0, ~cloud_cell >= 0");
-  }
-  ros_parameters::RejectUnknownParameters(
-      private_node,
-      {"approximate_sync", "calibration_file", "cloud_cell", "config_file", "image_transport",
-       "map_frame", "max_mesh_triangles", "queue_size", "rate", "save_mesh", "use_camera_info"});
-  return p;
-}
-
-}  // namespace dense_mapper
-
 class DenseMapperNodelet : public nodelet::Nodelet {
  public:
   ~DenseMapperNodelet() override {
@@ -109,7 +54,7 @@ class DenseMapperNodelet : public nodelet::Nodelet {
   bool Save(const std::string& path, Extract extract, Write write,
             stereo_fabmap_slam::SavePly::Response* response);
 
-  dense_mapper::DenseMapperParameters parameters_;
+  ros_wiring::DenseMapperParameters parameters_;
 
   // The worker's, and the save services' (set once, when the calibration is known).
   std::mutex stage_mutex_;
@@ -128,12 +73,12 @@ class DenseMapperNodelet : public nodelet::Nodelet {
 void DenseMapperNodelet::onInit() {
   ros::NodeHandle& node = getNodeHandle();
   try {
-    parameters_ = dense_mapper::ReadParameters(getPrivateNodeHandle());
+    parameters_ = ros_wiring::ReadDenseMapperParameters(getPrivateNodeHandle());
   } catch (const std::exception& error) {
     NODELET_FATAL_STREAM("bad configuration: " << error.what());
     throw;
   }
-  const dense_mapper::DenseMapperParameters& p = parameters_;
+  const ros_wiring::DenseMapperParameters& p = parameters_;
   NODELET_INFO_STREAM("options in force:\n" << p.printed);
   if (!p.use_camera_info) {
     try {
@@ -199,7 +144,7 @@ void DenseMapperNodelet::onInit() {
 void DenseMapperNodelet::Calibrate(const ros_input::MountedRig& rig) {
   std::lock_guard<std::mutex> lock(stage_mutex_);
   if (stage_) return;  // the first calibration defines the rectification, as the tracker's
-  const dense_mapper::DenseMapperParameters& p = parameters_;
+  const ros_wiring::DenseMapperParameters& p = parameters_;
   stage_.emplace(p.mapping, p.depth, p.fusion, rig.rectifier);
 }
 

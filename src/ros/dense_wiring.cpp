@@ -3,10 +3,43 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <stdexcept>
 
+#include "parameter_reader.h"
 #include "ros_conversions.h"
 
 namespace stereo_fabmap_slam::ros_wiring {
+
+DenseMapperParameters ReadDenseMapperParameters(const ros::NodeHandle& private_node) {
+  DenseMapperParameters p;
+  p.rectification = ros_parameters::ReadModuleOptions(private_node, p.rectification);
+  p.depth = ros_parameters::ReadModuleOptions(private_node, p.depth);
+  p.fusion = ros_parameters::ReadModuleOptions(private_node, p.fusion);
+  p.mapping = ros_parameters::ReadModuleOptions(private_node, p.mapping);
+  p.printed = ros_parameters::PrintedOptions(p.rectification) +
+              ros_parameters::PrintedOptions(p.depth) + ros_parameters::PrintedOptions(p.fusion) +
+              ros_parameters::PrintedOptions(p.mapping);
+  p.use_camera_info = private_node.param("use_camera_info", p.use_camera_info);
+  if (!p.use_camera_info && !private_node.getParam("calibration_file", p.calibration_file)) {
+    throw std::invalid_argument("set ~calibration_file or ~use_camera_info");
+  }
+  p.approximate_sync = private_node.param("approximate_sync", p.approximate_sync);
+  p.map_frame = private_node.param("map_frame", p.map_frame);
+  p.queue_size = private_node.param("queue_size", p.queue_size);
+  p.rate = private_node.param("rate", p.rate);
+  p.cloud_cell = private_node.param("cloud_cell", p.cloud_cell);
+  p.max_mesh_triangles = private_node.param("max_mesh_triangles", p.max_mesh_triangles);
+  p.save_mesh = private_node.param("save_mesh", p.save_mesh);
+  if (p.queue_size < 1 || !(p.rate > 0) || !(p.cloud_cell >= 0) || p.max_mesh_triangles < 1) {
+    throw std::invalid_argument(
+        "~queue_size, ~rate and ~max_mesh_triangles must be > 0, ~cloud_cell >= 0");
+  }
+  ros_parameters::RejectUnknownParameters(
+      private_node,
+      {"approximate_sync", "calibration_file", "cloud_cell", "config_file", "image_transport",
+       "map_frame", "max_mesh_triangles", "queue_size", "rate", "save_mesh", "use_camera_info"});
+  return p;
+}
 
 std::string PassToStage(const DenseMapperInput& input, dense::DenseMappingStage* stage) {
   if (const auto* pair = std::get_if<ImagePair>(&input)) {
