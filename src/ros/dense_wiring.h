@@ -1,8 +1,8 @@
 #pragma once
 
 // The DenseMapper nodelet's plumbing, apart from the nodelet so that it stays wiring only: its
-// parameters, its inputs as they arrive, and each handed to the dense mapping stage. Nothing here decides
-// anything about the dense map (dense::DenseMappingStage does).
+// parameters, its inputs as they arrive, and each handed to the dense mapping stage. Nothing here
+// decides anything about the dense map (dense::DenseMappingStage does).
 
 #include <string>
 #include <variant>
