@@ -39,14 +39,16 @@ Palette MakePalette(const OfficeOptions& options, std::uint64_t seed) {
                                           "paint " + std::to_string(variant)));
     }
   }
-  palette.door = palette.Add(draw.Door(false), "door");
-  palette.exit_door = palette.Add(draw.Door(true), "door with exit sign");
+  // One door design for the whole building, the exit sign's door included.
+  palette.door = palette.Add(draw.Door(false, seed * 59), "door");
+  palette.exit_door = palette.Add(draw.Door(true, seed * 59), "door with exit sign");
   palette.extinguisher = palette.Add(draw.FireExtinguisher(), "fire extinguisher");
   for (int k = 0; k < 3; ++k)
     palette.posters.push_back(palette.Add(draw.Poster(seed * 31 + k), "poster"));
   for (int k = 0; k < 2; ++k)
     palette.notice_boards.push_back(palette.Add(draw.NoticeBoard(seed * 37 + k), "notice board"));
-  for (int half = 0; half < 2; ++half) palette.logo[half] = palette.Add(draw.Logo(half), "logo");
+  for (int half = 0; half < 2; ++half)
+    palette.logo[half] = palette.Add(draw.Logo(half, seed * 61), "logo");
   for (int k = 0; k < 6; ++k) palette.art.push_back(palette.Add(draw.Art(seed * 41 + k), "art"));
   for (int k = 0; k < 2; ++k)
     palette.kitchen.push_back(palette.Add(draw.KitchenWall(seed * 43 + k), "kitchen"));

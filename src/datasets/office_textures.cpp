@@ -115,22 +115,55 @@ cv::Mat OfficeTextures::Paint(int variant, std::uint64_t seed) const {
   return panel;
 }
 
-cv::Mat OfficeTextures::Door(bool exit_sign) const {
+cv::Mat OfficeTextures::Door(bool exit_sign, std::uint64_t seed) const {
+  // Every building has its own door (wood, light wood or paint; a glass panel or none; lever or
+  // knob on either side; frame colour), repeated on every corridor of that building: a
+  // vocabulary trained on one rendered office has not seen the next one's doors, as a real
+  // building's are new to it.
+  std::mt19937_64 random(seed);
+  const auto pick = [&random](int count) {
+    return std::uniform_int_distribution<int>(0, count - 1)(random);
+  };
   cv::Mat panel = Blank(7);
   const double left = 0.5 * width_ - 0.48, right = 0.5 * width_ + 0.48;
-  cv::rectangle(panel, Area(left, 0, right, 2.15), cv::Scalar(205), cv::FILLED);  // frame
+  const double frame_grey[] = {205, 120, 60};
+  cv::rectangle(panel, Area(left, 0, right, 2.15), cv::Scalar(frame_grey[pick(3)]),
+                cv::FILLED);  // frame
   const cv::Rect leaf = Area(left + 0.05, 0, right - 0.05, 2.10);
-  // Wood grain: columns of slightly different darkness, stretched down the leaf.
-  cv::Mat grain = Uneven(cv::Size(leaf.width, 8), 68, 7, 11);
-  cv::resize(grain, grain, leaf.size(), 0, 0, cv::INTER_LINEAR);
-  grain.copyTo(panel(leaf));
-  cv::rectangle(panel, Area(left + 0.05, 0, right - 0.05, 0.25), cv::Scalar(120),
-                cv::FILLED);  // kick plate
-  cv::circle(panel, At(right - 0.12, 1.0), Texels(0.03), cv::Scalar(200), cv::FILLED);  // rosette
-  cv::rectangle(panel, Area(right - 0.26, 0.99, right - 0.12, 1.01), cv::Scalar(215),
-                cv::FILLED);  // lever
+  const int finish = pick(3);
+  if (finish < 2) {
+    // Wood grain: columns of slightly different darkness, stretched down the leaf.
+    cv::Mat grain = Uneven(cv::Size(leaf.width, 8), finish == 0 ? 68 : 150, 7, seed + 11);
+    cv::resize(grain, grain, leaf.size(), 0, 0, cv::INTER_LINEAR);
+    grain.copyTo(panel(leaf));
+  } else {  // paint, a shade away from the wall's
+    Uneven(leaf.size(), 95 + 20 * pick(3), 2, seed + 12).copyTo(panel(leaf));
+  }
+  const int glass = pick(3);  // none, a narrow vertical pane, a square at eye height
+  if (glass == 1) {
+    cv::rectangle(panel, Area(left + 0.2, 1.1, left + 0.32, 1.9), cv::Scalar(40), cv::FILLED);
+  } else if (glass == 2) {
+    cv::rectangle(panel, Area(left + 0.3, 1.35, right - 0.3, 1.75), cv::Scalar(40), cv::FILLED);
+  }
+  if (pick(2) == 0) {
+    cv::rectangle(panel, Area(left + 0.05, 0, right - 0.05, 0.25), cv::Scalar(120),
+                  cv::FILLED);  // kick plate
+  }
+  const bool hinges_left = pick(2) == 0;
+  const double handle_x = hinges_left ? right - 0.12 : left + 0.12;
+  const double hinge_x = hinges_left ? left + 0.045 : right - 0.06;
+  cv::circle(panel, At(handle_x, 1.0), Texels(0.03), cv::Scalar(200), cv::FILLED);  // rosette
+  if (pick(2) == 0) {  // a lever towards the leaf's middle; else the rosette's knob alone
+    const double towards = hinges_left ? -0.14 : 0.14;
+    cv::rectangle(panel,
+                  Area(std::min(handle_x, handle_x + towards), 0.99,
+                       std::max(handle_x, handle_x + towards), 1.01),
+                  cv::Scalar(215), cv::FILLED);
+  } else {
+    cv::circle(panel, At(handle_x, 1.0), Texels(0.018), cv::Scalar(150), cv::FILLED);
+  }
   for (const double z : {0.3, 1.05, 1.8})
-    cv::rectangle(panel, Area(left + 0.045, z, left + 0.06, z + 0.1), cv::Scalar(150), cv::FILLED);
+    cv::rectangle(panel, Area(hinge_x, z, hinge_x + 0.015, z + 0.1), cv::Scalar(150), cv::FILLED);
   if (exit_sign) {
     const cv::Rect sign = Area(0.5 * width_ - 0.2, 2.25, 0.5 * width_ + 0.2, 2.45);
     cv::rectangle(panel, sign, cv::Scalar(235), cv::FILLED);
@@ -198,11 +231,14 @@ cv::Mat OfficeTextures::FireExtinguisher() const {
   return panel;
 }
 
-cv::Mat OfficeTextures::Logo(int half) const {
+cv::Mat OfficeTextures::Logo(int half, std::uint64_t seed) const {
   cv::Mat panel = Blank(400 + half);
+  // The company's name, two words drawn from the seed: each building's own.
+  std::mt19937_64 random(seed);
+  const std::string first = Word(&random, 4, 7), second = Word(&random, 3, 6);
   cv::rectangle(panel, Area(half == 0 ? 0.2 : 0, 1.3, half == 0 ? width_ : width_ - 0.2, 2.1),
                 cv::Scalar(45), cv::FILLED);
-  Title(&panel, half == 0 ? "STEREO" : "LABS",
+  Title(&panel, half == 0 ? first : second,
         Area(half == 0 ? 0.3 : 0.1, 1.45, half == 0 ? width_ - 0.1 : width_ - 0.3, 1.95), 235,
         cv::FONT_HERSHEY_TRIPLEX);
   return panel;

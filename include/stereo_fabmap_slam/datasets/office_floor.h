@@ -20,8 +20,9 @@ struct OfficeOptions {
   void Validate() const;  // throws std::invalid_argument
 };
 
-// An office floor that looks like a real building: long corridors of plain cream paint, one
-// door design repeated at a fixed spacing, suspended ceilings with a light every 3 m, a glossy
+// An office floor that looks like a real building: long corridors of plain cream paint, the
+// building's one door design (each seed draws its own, as each seed is another building)
+// repeated at a fixed spacing, suspended ceilings with a light every 3 m, a glossy
 // floor, and posters, notice boards, fire extinguishers and exit signs that repeat from corridor
 // to corridor; a lobby (company name, art, a reception desk, a plant) and a kitchen corner
 // (cupboards, tiles, a counter, a fridge) are the only distinctive places. Everything is drawn

@@ -18,14 +18,15 @@ class OfficeTextures {
   // Cream paint with a baseboard; variant 0 is bare, 1 has a light switch, 2 a power outlet, 3
   // scuff marks. `seed` draws the faint unevenness of the paint.
   cv::Mat Paint(int variant, std::uint64_t seed) const;
-  // The one door every office has: frame, dark leaf, lever handle, kick plate; with an exit sign
-  // above it if asked.
-  cv::Mat Door(bool exit_sign) const;
+  // The one door design of a building, drawn from `seed` (leaf finish, glass, kick plate,
+  // handle, hinge side, frame); with an exit sign above it if asked.
+  cv::Mat Door(bool exit_sign, std::uint64_t seed) const;
   cv::Mat Poster(std::uint64_t seed) const;       // a framed poster: title, picture, small print
   cv::Mat NoticeBoard(std::uint64_t seed) const;  // cork with pinned sheets of text
   cv::Mat FireExtinguisher() const;
-  // The lobby: one half of the company's name on a dark plate (`half` 0 or 1), and abstract art.
-  cv::Mat Logo(int half) const;
+  // The lobby: one half (`half` 0 or 1) of the company's name, drawn from `seed`, on a dark
+  // plate, and abstract art.
+  cv::Mat Logo(int half, std::uint64_t seed) const;
   cv::Mat Art(std::uint64_t seed) const;
   // The kitchen corner: tiled splashback between lower and upper cupboards.
   cv::Mat KitchenWall(std::uint64_t seed) const;
