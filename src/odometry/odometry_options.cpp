@@ -41,6 +41,9 @@ void TrackerOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("local_keyframes", &local_keyframes);
   visitor.Visit("max_prediction_gap", &max_prediction_gap);
   visitor.Visit("max_time_lost", &max_time_lost);
+  visitor.Visit("max_descriptor_jump", &max_descriptor_jump);
+  visitor.Visit("max_descriptor_jump_deg", &max_descriptor_jump_deg);
+  visitor.Visit("jump_min_inlier_cells", &jump_min_inlier_cells);
   visitor.Visit("parallel", &parallel);
   visitor.Visit("queued_pairs", &queued_pairs);
   visitor.Visit("catch_up_gap", &catch_up_gap);
@@ -65,6 +68,12 @@ void TrackerOptions::Validate() const {
   if (!(max_prediction_gap > 0))
     throw std::invalid_argument("tracker.max_prediction_gap must be > 0");
   if (!(max_time_lost >= 0)) throw std::invalid_argument("tracker.max_time_lost must be >= 0");
+  if (!(max_descriptor_jump > 0 && max_descriptor_jump_deg > 0) || jump_min_inlier_cells < 1 ||
+      jump_min_inlier_cells > 16) {
+    throw std::invalid_argument(
+        "tracker: max_descriptor_jump and max_descriptor_jump_deg > 0, jump_min_inlier_cells in "
+        "[1, 16]");
+  }
   if (queued_pairs < 1) throw std::invalid_argument("tracker.queued_pairs must be >= 1");
   if (!(catch_up_gap >= 0)) throw std::invalid_argument("tracker.catch_up_gap must be >= 0");
   if (min_map_points < 3 || local_keyframes < 1) {

@@ -10,6 +10,7 @@
 #include "stereo_fabmap_slam/features/descriptor_matching.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/keypoint_grid.h"
+#include "stereo_fabmap_slam/geometry/image_coverage.h"
 
 namespace stereo_fabmap_slam::odometry {
 namespace {
@@ -365,6 +366,8 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
     return r.success ? static_cast<int>(r.inliers.size()) : 0;
   };
   const bool searched_by_descriptor = inliers(ransac) < options_.min_inliers_ok;
+  const int prediction_consensus = inliers(ransac);
+  bool found_by_descriptor = false;
   if (searched_by_descriptor) {
     // The prediction found too little: the camera moved other than the motion model says (it
     // turned or stopped over frames a busy tracker skipped, or right after a new segment started
@@ -379,6 +382,7 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
                       " matches; the prediction gave " + std::to_string(inliers(ransac)) + ")";
       ransac = std::move(without_prior);
       result.matches = static_cast<int>(by_descriptor.size());
+      found_by_descriptor = true;
     }
   }
   if (inliers(ransac) < options_.min_inliers_weak) {
@@ -413,6 +417,20 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
                      std::to_string(result.inliers) + " inliers after refinement";
     return Lose(timestamp, std::move(features), predicted, inliers(ransac), std::move(result));
   }
+  if (found_by_descriptor) {
+    const Eigen::Isometry3d jump = predicted.inverse() * T_world_camera;
+    char text[64];
+    std::snprintf(text, sizeof(text), "; %.2f m, %.0f deg from the prediction",
+                  jump.translation().norm(), RotationDegrees(jump));
+    result.reason += text;
+    if (!EnoughToJump(jump, result)) {
+      result.state = TrackingState::kLost;
+      result.reason += ": too far for " + std::to_string(result.inliers) + " inliers";
+      // The map is kept only if the prediction itself still saw it.
+      return Lose(timestamp, std::move(features), predicted, prediction_consensus,
+                  std::move(result));
+    }
+  }
   result.state =
       result.inliers < options_.min_inliers_ok ? TrackingState::kWeak : TrackingState::kOk;
   if (result.state == TrackingState::kWeak) {
@@ -434,6 +452,18 @@ TrackingResult Tracker::Track(double timestamp, features::StereoFeatures feature
   }
   Remember(timestamp, T_world_camera, &result);
   return result;
+}
+
+bool Tracker::EnoughToJump(const Eigen::Isometry3d& jump, const TrackingResult& result) const {
+  if (jump.translation().norm() <= options_.max_descriptor_jump &&
+      RotationDegrees(jump) <= options_.max_descriptor_jump_deg) {
+    return true;
+  }
+  std::vector<Eigen::Vector2d> pixels;
+  for (const cv::Point2f& pixel : result.inlier_pixels) pixels.emplace_back(pixel.x, pixel.y);
+  constexpr int kGrid = 4;  // as the loop detector's and relocalization's spread
+  return result.inliers >= options_.min_inliers_ok &&
+         geometry::OccupiedCells(pixels, camera_.size, kGrid) >= options_.jump_min_inlier_cells;
 }
 
 KeyframePolicyInput Tracker::KeyframeInput(double timestamp,

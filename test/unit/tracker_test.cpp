@@ -1,7 +1,8 @@
 // Tracker::ApplyUpdate: the backend's corrections reach the tracker's map and its motion model;
 // the motion model spans skipped frames; a motion it does not predict is found by descriptor; a
 // lost frame that still shows the map keeps it for the next frames, for a while; a keyframe due
-// in the frames a busy caller will skip is taken before them.
+// in the frames a busy caller will skip is taken before them; a pose found by descriptor far from
+// the prediction needs a relocalization's evidence.
 #include "stereo_fabmap_slam/odometry/tracker.h"
 
 #include <string>
@@ -188,6 +189,8 @@ TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
   // to the right. The prediction, 1.2 m further to the right and not turned, puts every point
   // 69-183 px (1.2 m at 3-8 m, fx 458) and 64 px (the turn) from where it is, far beyond the
   // widest search around it (3 x 15 px): by projection alone the frame would start a new map.
+  // Found by descriptor 1.2 m from the prediction, beyond max_descriptor_jump, the pose has a
+  // relocalization's evidence: hundreds of inliers over the whole image.
   SlidingCamera camera;
   const Eigen::Isometry3d turned = SidewaysAndTurned(0.6, -8.0);
   const odometry::TrackingResult after = camera.tracker.Track(0.06, Observe(camera.world, turned));
@@ -202,6 +205,96 @@ TEST(Tracker, AMotionTheModelMissesIsFoundByDescriptor) {
   const odometry::TrackingResult next = camera.tracker.Track(0.07, Observe(camera.world, turned));
   EXPECT_EQ(next.state, odometry::TrackingState::kOk) << next.reason;
   EXPECT_EQ(next.reason.find("by descriptor"), std::string::npos) << next.reason;
+}
+
+// A kidnapped camera 60 m away sees, among things the map never held, a copy of some of the
+// map's points (a photograph the building repeats, identical doors): the points that a camera at
+// x = -1.5 m, 2.4 m from where the motion model expects this frame, sees of the map within
+// `window`, copied 60 m along x with their descriptors, and seen from 60 m further on.
+features::StereoFeatures LookAlikeFarFromThePrediction(const StereoWorld& world,
+                                                       const cv::Rect& window, int keep_every,
+                                                       int* copied = nullptr) {
+  const Eigen::Isometry3d look_alike_view = SidewaysAndTurned(-1.5);
+  const Eigen::Vector3d offset(60.0, 0, 0);
+  StereoWorld elsewhere;
+  std::vector<Eigen::Vector3d> copies;
+  std::vector<int> rows;
+  int seen = 0;
+  for (int i = 0; i < static_cast<int>(world.points.size()); ++i) {
+    // In the map: seen from the first keyframe (x = 0) with both cameras.
+    const Eigen::Vector3d in_map = world.points[i];
+    const Eigen::Vector3d first = kCamera.Project(in_map);
+    if (in_map.z() < 0.5 || first.x() < 0 || first.x() >= kCamera.size.width || first.y() < 0 ||
+        first.y() >= kCamera.size.height || first.z() < 0) {
+      continue;
+    }
+    const Eigen::Vector3d seen_there = kCamera.Project(look_alike_view.inverse() * in_map);
+    if (!window.contains(
+            cv::Point(static_cast<int>(seen_there.x()), static_cast<int>(seen_there.y()))))
+      continue;
+    if (seen++ % keep_every != 0) continue;
+    copies.push_back(in_map + offset);
+    rows.push_back(i);
+  }
+  cv::Mat descriptors(static_cast<int>(rows.size()), world.descriptors.cols, CV_8U);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    world.descriptors.row(rows[k]).copyTo(descriptors.row(static_cast<int>(k)));
+  }
+  elsewhere.Add(copies, descriptors);
+  if (copied) *copied = static_cast<int>(copies.size());
+  std::vector<Eigen::Vector3d> other = RandomPoints(600, 31);
+  for (Eigen::Vector3d& point : other) point += look_alike_view.translation() + offset;
+  elsewhere.Add(other, 32);
+  Eigen::Isometry3d kidnapped = look_alike_view;
+  kidnapped.translation() += offset;
+  return Observe(elsewhere, kidnapped);
+}
+
+TEST(Tracker, ALookAlikeFarFromThePredictionNeedsTheEvidenceOfARelocalization) {
+  // Found by descriptor, the copies put the camera at x = -1.5 m, 2.4 m from the prediction
+  // (0.9 m): more than max_descriptor_jump (1 m), so the pose must show a relocalization's
+  // evidence, and these do not: a photograph, all of the copied points within a quarter of the
+  // image (four cells of the 4 x 4 grid, fewer than jump_min_inlier_cells 6; 59 points, more
+  // than min_inliers_ok 50), and 30 look-alikes scattered over the whole image (fewer than
+  // min_inliers_ok, more than min_inliers_weak 15, which tracking near the prediction needs).
+  // Either way the frame is lost, and as the prediction found nothing of the map, a new segment
+  // starts at once.
+  const struct {
+    const char* what;
+    cv::Rect window;
+    int keep_every;
+  } cases[] = {{"a photograph", cv::Rect(190, 122, 372, 236), 1},
+               {"scattered look-alikes", cv::Rect(0, 0, 752, 480), 7}};
+  for (const auto& look_alike : cases) {
+    SlidingCamera camera;
+    int copied = 0;
+    const features::StereoFeatures frame = LookAlikeFarFromThePrediction(
+        camera.world, look_alike.window, look_alike.keep_every, &copied);
+    // What each case is about: the photograph has inliers enough, the scattered ones spread.
+    EXPECT_GE(copied, look_alike.keep_every == 1 ? 50 : 16) << look_alike.what;
+    const odometry::TrackingResult kidnapped = camera.tracker.Track(0.03, frame);
+    EXPECT_EQ(kidnapped.state, odometry::TrackingState::kLost)
+        << look_alike.what << ": " << kidnapped.reason;
+    EXPECT_NE(kidnapped.reason.find("from the prediction: too far"), std::string::npos)
+        << look_alike.what << ": " << kidnapped.reason;
+    ASSERT_TRUE(kidnapped.keyframe.has_value()) << look_alike.what << ": " << kidnapped.reason;
+    EXPECT_TRUE(kidnapped.keyframe->starts_new_segment) << look_alike.what;
+  }
+  // With max_descriptor_jump beyond the jump the look-alike is tracked, at the copy's pose:
+  // what happened to a kidnapped camera in a hall that repeats its photographs.
+  odometry::TrackerOptions trusting = SlidingCamera::SerialOptions();
+  trusting.max_descriptor_jump = 10.0;
+  odometry::Tracker tracker(trusting, odometry::KeyframePolicyOptions(), kCamera, cv::NORM_HAMMING,
+                            60.0);
+  SlidingCamera camera;
+  for (const int frame : {0, 1, 2}) {
+    tracker.Track(0.01 * frame, Observe(camera.world, SidewaysAndTurned(0.3 * frame)));
+  }
+  const odometry::TrackingResult fooled = tracker.Track(
+      0.03, LookAlikeFarFromThePrediction(camera.world, cases[1].window, cases[1].keep_every));
+  EXPECT_NE(fooled.state, odometry::TrackingState::kLost) << fooled.reason;
+  EXPECT_LT((fooled.T_world_camera.translation() - Eigen::Vector3d(-1.5, 0, 0)).norm(), 0.05)
+      << fooled.reason;
 }
 
 // A frame that still shows the map, too poorly to trust a pose (motion blur leaves a few of its

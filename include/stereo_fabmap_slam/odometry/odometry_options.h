@@ -53,7 +53,21 @@ struct TrackerOptions {
   // max_prediction_gap, where the motion model stops extrapolating. ORB-SLAM3's "recently lost"
   // state is the same idea.
   double max_time_lost = 0.5;
-  bool parallel = true;  // search map points on two threads
+  // A pose the descriptor search finds farther than this from the motion model's guess is a
+  // relocalization within the local map, not tracking, and needs the evidence relocalization
+  // needs: min_inliers_ok inliers spread over at least `jump_min_inlier_cells` of a 4 x 4 grid
+  // over the image (else the frame is lost). Without a prediction, descriptors match whatever
+  // looks the same: a photograph a hall repeats, the same door on another corridor; 20-30
+  // inliers on one picture agree with a pose metres off (a kidnapped camera, rendered hall seed
+  // 4, was put 6.5 m from the truth with 31 inliers on one such photograph and the odometry
+  // never recovered). Legitimate recoveries (a turn the motion model missed, skipped frames)
+  // land near the guess: all 13 on MH01, the hall and the office routes, every frame and every
+  // 2.5th, within 0.05 m and 3 deg of it, some with 26 inliers. 1 m and 45 deg: what the
+  // half second of max_time_lost allows at these speeds (above), twenty times what was seen.
+  double max_descriptor_jump = 1.0;       // [m]
+  double max_descriptor_jump_deg = 45.0;  // [deg]
+  int jump_min_inlier_cells = 6;          // the loop detector's spread (loop_detection)
+  bool parallel = true;                   // search map points on two threads
   // The StereoTracker nodelet's FrameQueue (odometry/frame_queue.h), for a tracker slower than
   // the camera; the offline runner tracks every frame. 16 pairs absorb a tracker 4 times slower
   // than the camera, and at 20 Hz less than a second of images (12 MB of EuRoC's).

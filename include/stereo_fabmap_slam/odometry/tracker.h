@@ -121,6 +121,10 @@ class Tracker {
   TrackingResult Lose(double timestamp, features::StereoFeatures features,
                       const Eigen::Isometry3d& predicted, int consensus, TrackingResult result);
   void Remember(double timestamp, const Eigen::Isometry3d& T_world_camera, TrackingResult* result);
+  // Whether a pose found by descriptor, `jump` from the prediction, may be taken: near the
+  // prediction always; farther only with relocalization's evidence (TrackerOptions::
+  // max_descriptor_jump), the inliers of `result` counted and their spread over the image.
+  bool EnoughToJump(const Eigen::Isometry3d& jump, const TrackingResult& result) const;
   // What the keyframe policy decides on for a frame tracked at `T_world_camera`; updates the
   // ratio rule's reference.
   KeyframePolicyInput KeyframeInput(double timestamp, const Eigen::Isometry3d& T_world_camera,
