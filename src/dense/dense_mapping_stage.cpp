@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "stereo_fabmap_slam/dense/mesh_simplification.h"
+#include "stereo_fabmap_slam/dense/ply_files.h"
 
 namespace stereo_fabmap_slam::dense {
 
@@ -69,8 +70,10 @@ void DenseMappingStage::Fuse(const Ready& ready, DenseStepReport* report) {
     return;
   }
   DenseStepReport::Fused fused{ready.keyframe.id, {}};
-  if (volume_.Add(ready.keyframe.id, left, right, MapPose(ready.keyframe), &fused.timing))
+  if (volume_.Add(ready.keyframe.id, left, right, MapPose(ready.keyframe), &fused.timing)) {
     report->fused.push_back(fused);
+    fused_timings_.push_back(fused.timing);
+  }
 }
 
 DenseStepReport DenseMappingStage::Step() {
@@ -97,6 +100,18 @@ Mesh DenseMappingStage::ViewerMesh(std::size_t max_triangles) const {
     mesh = SimplifiedMesh(mesh, cell);
   }
   return mesh;
+}
+
+Mesh DenseMappingStage::SaveMesh(const std::string& path) const {
+  Mesh mesh = volume_.ExtractMesh();
+  WriteMeshPly(mesh, path);
+  return mesh;
+}
+
+std::size_t DenseMappingStage::SaveCloud(const std::string& path) const {
+  const Cloud cloud = volume_.ExtractCloud();
+  WriteCloudPly(cloud, path);
+  return cloud.points.size();
 }
 
 }  // namespace stereo_fabmap_slam::dense

@@ -4,7 +4,6 @@
 // arrival order for a worker thread it owns at a lower priority; the stage decides what is fused
 // when. dense_cloud (PointCloud2, thinned) and dense_mesh (a marker) out at ~rate when someone
 // listens; save_mesh and save_cloud write PLY files.
-#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -29,7 +28,7 @@
 #include "dense_messages.h"
 #include "dense_wiring.h"
 #include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
-#include "stereo_fabmap_slam/dense/ply_files.h"
+#include "stereo_fabmap_slam/dense/surface_comparison.h"
 #include "stereo_image_input.h"
 
 namespace stereo_fabmap_slam {
@@ -50,9 +49,9 @@ class DenseMapperNodelet : public nodelet::Nodelet {
   void Publish();
   // ~save_mesh, when the graph shuts down (what the Recorder does for the run's files).
   void SaveMeshAtShutdown();
-  template <typename Extract, typename Write>
-  bool Save(const std::string& path, Extract extract, Write write,
-            stereo_fabmap_slam::SavePly::Response* response);
+  // `save` writes `path` from the stage and returns the vertices or points written.
+  template <typename SaveTo>
+  bool Save(const std::string& path, SaveTo save, stereo_fabmap_slam::SavePly::Response* response);
 
   ros_wiring::DenseMapperParameters parameters_;
 
@@ -61,7 +60,6 @@ class DenseMapperNodelet : public nodelet::Nodelet {
   std::optional<dense::DenseMappingStage> stage_;
   ros_wiring::DenseMapperQueue inputs_;   // in the order they arrived: the stage takes them so
   bool changed_since_published_ = false;  // worker only
-  std::vector<double> fuse_ms_;           // worker only: depth + fusion of the recent keyframes
 
   std::thread worker_;
   std::unique_ptr<ros_input::StereoImageInput> input_;
@@ -97,10 +95,8 @@ void DenseMapperNodelet::onInit() {
       "save_mesh", [this](auto& request, auto& response) {
         return Save(
             request.path,
-            [](const dense::DenseMappingStage& stage) { return stage.volume().ExtractMesh(); },
-            [](const dense::Mesh& mesh, const std::string& path) {
-              dense::WriteMeshPly(mesh, path);
-              return mesh.vertices.size();
+            [](const dense::DenseMappingStage& stage, const std::string& path) {
+              return stage.SaveMesh(path).vertices.size();
             },
             &response);
       });
@@ -109,10 +105,8 @@ void DenseMapperNodelet::onInit() {
       "save_cloud", [this](auto& request, auto& response) {
         return Save(
             request.path,
-            [](const dense::DenseMappingStage& stage) { return stage.volume().ExtractCloud(); },
-            [](const dense::Cloud& cloud, const std::string& path) {
-              dense::WriteCloudPly(cloud, path);
-              return cloud.points.size();
+            [](const dense::DenseMappingStage& stage, const std::string& path) {
+              return stage.SaveCloud(path);
             },
             &response);
       });
@@ -188,18 +182,21 @@ void DenseMapperNodelet::Report(const dense::DenseStepReport& report) {
                                  "poses ("
                                      << report.still_moving << " still to move)");
   }
-  for (const dense::DenseStepReport::Fused& fused : report.fused) {
-    fuse_ms_.push_back(fused.timing.depth_ms + fused.timing.fusion_ms);
-    if (fuse_ms_.size() < 20) continue;
-    std::nth_element(fuse_ms_.begin(), fuse_ms_.begin() + 10, fuse_ms_.end());
-    const dense::KeyframeVolume& volume = stage_->volume();
-    NODELET_INFO(
-        "%zu keyframes fused (depth + fusion: median %.1f ms over the last 20), %zu blocks, "
-        "%.0f MB",
-        volume.keyframes(), fuse_ms_[10], volume.fusion().blocks(),
-        volume.memory_bytes() / 1048576.0);
-    fuse_ms_.clear();
+  // Every 20 keyframes fused: their median depth + fusion time and the volume's size.
+  constexpr std::size_t kLogEvery = 20;
+  const std::vector<dense::KeyframeVolume::Timing>& timings = stage_->fused_timings();
+  if (report.fused.empty() ||
+      timings.size() / kLogEvery == (timings.size() - report.fused.size()) / kLogEvery) {
+    return;
   }
+  std::vector<double> fuse_ms;
+  for (std::size_t k = timings.size() - kLogEvery; k < timings.size(); ++k)
+    fuse_ms.push_back(timings[k].depth_ms + timings[k].fusion_ms);
+  const dense::KeyframeVolume& volume = stage_->volume();
+  NODELET_INFO(
+      "%zu keyframes fused (depth + fusion: median %.1f ms over the last %zu), %zu blocks, %.0f MB",
+      volume.keyframes(), dense::Quantile(fuse_ms, 0.5), kLogEvery, volume.fusion().blocks(),
+      volume.memory_bytes() / 1048576.0);
 }
 
 void DenseMapperNodelet::Publish() {
@@ -232,8 +229,7 @@ void DenseMapperNodelet::SaveMeshAtShutdown() {
   std::lock_guard<std::mutex> lock(stage_mutex_);
   if (!stage_) return;
   try {
-    const dense::Mesh mesh = stage_->volume().ExtractMesh();
-    dense::WriteMeshPly(mesh, parameters_.save_mesh);
+    const dense::Mesh mesh = stage_->SaveMesh(parameters_.save_mesh);
     NODELET_INFO_STREAM("wrote " << parameters_.save_mesh << ": " << mesh.vertices.size()
                                  << " vertices of " << stage_->volume().keyframes()
                                  << " keyframes");
@@ -242,13 +238,13 @@ void DenseMapperNodelet::SaveMeshAtShutdown() {
   }
 }
 
-template <typename Extract, typename Write>
-bool DenseMapperNodelet::Save(const std::string& path, Extract extract, Write write,
+template <typename SaveTo>
+bool DenseMapperNodelet::Save(const std::string& path, SaveTo save,
                               stereo_fabmap_slam::SavePly::Response* response) {
   try {
     std::lock_guard<std::mutex> lock(stage_mutex_);
     if (!stage_) throw std::runtime_error("not calibrated yet: no camera_info came");
-    response->vertices = static_cast<std::uint32_t>(write(extract(*stage_), path));
+    response->vertices = static_cast<std::uint32_t>(save(*stage_, path));
     response->success = true;
     response->message =
         "wrote " + path + " (" + std::to_string(stage_->volume().keyframes()) + " keyframes)";

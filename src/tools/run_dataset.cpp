@@ -21,7 +21,6 @@
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
 #include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
-#include "stereo_fabmap_slam/dense/ply_files.h"
 #include "stereo_fabmap_slam/dense/surface_comparison.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/trajectory_file.h"
@@ -120,13 +119,17 @@ class DenseRun {
 
   void Write(const std::string& output, pipeline::JsonObject* summary) const {
     const dense::KeyframeVolume& volume = stage_.volume();
-    const dense::Mesh mesh = volume.ExtractMesh();
-    dense::WriteMeshPly(mesh, output + "/mesh.ply");
-    dense::WriteCloudPly(volume.ExtractCloud(), output + "/dense_cloud.ply");
-    summary->Add("dense_keyframes", depth_ms_.size());
+    const dense::Mesh mesh = stage_.SaveMesh(output + "/mesh.ply");
+    stage_.SaveCloud(output + "/dense_cloud.ply");
+    std::vector<double> depth_ms, fusion_ms;
+    for (const dense::KeyframeVolume::Timing& timing : stage_.fused_timings()) {
+      depth_ms.push_back(timing.depth_ms);
+      fusion_ms.push_back(timing.fusion_ms);
+    }
+    summary->Add("dense_keyframes", depth_ms.size());
     summary->Add("dense_keyframes_moved", moved_);
-    summary->Add("dense_depth_ms_median", dense::Quantile(depth_ms_, 0.5), 3);
-    summary->Add("dense_fusion_ms_median", dense::Quantile(fusion_ms_, 0.5), 3);
+    summary->Add("dense_depth_ms_median", dense::Quantile(depth_ms, 0.5), 3);
+    summary->Add("dense_fusion_ms_median", dense::Quantile(fusion_ms, 0.5), 3);
     summary->Add("dense_time_s", ms_ / 1000.0, 3);
     summary->Add("dense_mesh_vertices", mesh.vertices.size());
     summary->Add("dense_mesh_triangles", mesh.triangles.size());
@@ -148,16 +151,11 @@ class DenseRun {
     const dense::DenseStepReport report = stage_.Step();
     for (const std::string& left_out : report.left_out)
       if (!quiet_) std::fprintf(stderr, "dense map: %s\n", left_out.c_str());
-    for (const dense::DenseStepReport::Fused& fused : report.fused) {
-      depth_ms_.push_back(fused.timing.depth_ms);
-      fusion_ms_.push_back(fused.timing.fusion_ms);
-    }
     moved_ += report.moved;
   }
 
   dense::DenseMappingStage stage_;
   bool quiet_;
-  std::vector<double> depth_ms_, fusion_ms_;
   std::size_t moved_ = 0;  // re-integrations at a pose the map moved
   double ms_ = 0;          // all the dense mapping took
 };

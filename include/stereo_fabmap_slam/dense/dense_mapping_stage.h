@@ -77,6 +77,13 @@ class DenseMappingStage {
   bool busy() const { return !ready_.empty() || moves_pending_; }
 
   const KeyframeVolume& volume() const { return volume_; }
+  // Depth and fusion times of every new keyframe fused so far, in order (not the moves): what
+  // the nodelet's log and run_dataset's summary report.
+  const std::vector<KeyframeVolume::Timing>& fused_timings() const { return fused_timings_; }
+  // The mesh and the point cloud written as PLY files (dense/ply_files.h); the mesh is returned
+  // for what the caller reports of it, the cloud's point count likewise. Throw on I/O errors.
+  Mesh SaveMesh(const std::string& path) const;
+  std::size_t SaveCloud(const std::string& path) const;
   // The mesh simplified until it has at most `max_triangles` (for a viewer: rviz draws
   // 100,000 triangles smoothly); vertices merged per cube of twice the voxel, then doubled.
   Mesh ViewerMesh(std::size_t max_triangles) const;
@@ -99,6 +106,7 @@ class DenseMappingStage {
   Eigen::Isometry3d T_map_odom_ = Eigen::Isometry3d::Identity();
   std::map<std::uint64_t, Eigen::Isometry3d> map_poses_;
   bool moves_pending_ = false;
+  std::vector<KeyframeVolume::Timing> fused_timings_;
 };
 
 }  // namespace stereo_fabmap_slam::dense
