@@ -461,9 +461,9 @@ bool Tracker::EnoughToJump(const Eigen::Isometry3d& jump, const TrackingResult& 
   }
   std::vector<Eigen::Vector2d> pixels;
   for (const cv::Point2f& pixel : result.inlier_pixels) pixels.emplace_back(pixel.x, pixel.y);
-  constexpr int kGrid = 4;  // as the loop detector's and relocalization's spread
   return result.inliers >= options_.min_inliers_ok &&
-         geometry::OccupiedCells(pixels, camera_.size, kGrid) >= options_.jump_min_inlier_cells;
+         geometry::OccupiedCells(pixels, camera_.size, geometry::kInlierSpreadGrid) >=
+             options_.jump_min_inlier_cells;
 }
 
 KeyframePolicyInput Tracker::KeyframeInput(double timestamp,

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/features/stereo_features.h"
+#include "stereo_fabmap_slam/geometry/image_coverage.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/geometry/pose_refiner.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
@@ -52,7 +53,7 @@ struct ViewVerification {
 
 // The cells of a 4 x 4 grid over the image that hold an inlier: how widely a pose is supported.
 // A pose verified by inliers on one small object (a poster repeated elsewhere) covers few.
-inline constexpr int kSpreadGrid = 4;
+inline constexpr int kSpreadGrid = geometry::kInlierSpreadGrid;
 int InlierCells(const std::vector<geometry::PoseObservation>& observations,
                 const std::vector<bool>& inlier, const cv::Size& image_size);
 
