@@ -232,7 +232,59 @@ LoopDetection LoopDetector::Detect(const map::StoredKeyframe& query) {
     if (verified.accepted) detection.loop = verified.edge;
     detection.candidates.push_back(std::move(verified));
   }
+  if (detection.loop && query.segment >= 0) {
+    last_loops_[query.segment] = {detection.loop->query_id, detection.loop->match_id,
+                                  detection.loop->T_match_query};
+  }
   return detection;
+}
+
+std::string LoopDetector::Disagreement(const map::StoredKeyframe& query,
+                                       const map::StoredKeyframe& candidate,
+                                       const Eigen::Isometry3d& T_candidate_query) const {
+  if (query.segment < 0) return "";
+  // Where the odometry puts the candidate: directly within one segment; else through the query
+  // segment's last loop, if the query is near it and its match shares the candidate's segment.
+  Eigen::Isometry3d expected;
+  double path = 0;  // travelled by the odometry that expected spans
+  std::string through;
+  if (query.segment == candidate.segment) {
+    expected = candidate.keyframe.T_world_camera.inverse() * query.keyframe.T_world_camera;
+    path = std::abs(query.path_length - candidate.path_length);
+  } else {
+    const auto last = last_loops_.find(query.segment);
+    if (options_.loop_consistency_path <= 0 || last == last_loops_.end() ||
+        !database_.Contains(last->second.query_id) || !database_.Contains(last->second.match_id)) {
+      return "";
+    }
+    const AcceptedLoop& loop = last->second;
+    const map::StoredKeyframe& loop_query = database_.Get(loop.query_id);
+    const map::StoredKeyframe& loop_match = database_.Get(loop.match_id);
+    const double since = std::abs(query.path_length - loop_query.path_length);
+    if (loop_query.segment != query.segment || loop_match.segment != candidate.segment ||
+        since > options_.loop_consistency_path) {
+      return "";
+    }
+    expected = candidate.keyframe.T_world_camera.inverse() * loop_match.keyframe.T_world_camera *
+               loop.T_match_query * loop_query.keyframe.T_world_camera.inverse() *
+               query.keyframe.T_world_camera;
+    path = since + std::abs(candidate.path_length - loop_match.path_length);
+    through = " through the loop " + std::to_string(loop.query_id) + " -> " +
+              std::to_string(loop.match_id);
+  }
+  const double allowance =
+      std::max(options_.min_drift_allowance, options_.max_drift_fraction * path);
+  const double translation_error =
+      (expected.translation() - T_candidate_query.translation()).norm();
+  const double rotation_error =
+      RotationDegrees(expected.linear().transpose() * T_candidate_query.linear());
+  if (translation_error <= allowance && rotation_error <= options_.max_rotation_drift_deg)
+    return "";
+  char text[200];
+  std::snprintf(text, sizeof(text),
+                "disagrees with the odometry%s by %.2f m, %.1f deg (drift allowance %.2f m)",
+                through.c_str(), translation_error, rotation_error, allowance);
+  return text;
 }
 
 LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
@@ -279,24 +331,10 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
     result.reason = text;
     return result;
   }
-  if (query.segment >= 0 && query.segment == candidate.segment) {
-    const Eigen::Isometry3d odometry =
-        candidate.keyframe.T_world_camera.inverse() * query.keyframe.T_world_camera;
-    const double allowance =
-        std::max(options_.min_drift_allowance,
-                 options_.max_drift_fraction * std::abs(query.path_length - candidate.path_length));
-    const double translation_error =
-        (odometry.translation() - T_candidate_query.translation()).norm();
-    const double rotation_error =
-        RotationDegrees(odometry.linear().transpose() * T_candidate_query.linear());
-    if (translation_error > allowance || rotation_error > options_.max_rotation_drift_deg) {
-      char text[160];
-      std::snprintf(text, sizeof(text),
-                    "disagrees with the odometry by %.2f m, %.1f deg (drift allowance %.2f m)",
-                    translation_error, rotation_error, allowance);
-      result.reason = text;
-      return result;
-    }
+  if (std::string disagreement = Disagreement(query, candidate, T_candidate_query);
+      !disagreement.empty()) {
+    result.reason = std::move(disagreement);
+    return result;
   }
 
   result.accepted = true;

@@ -88,6 +88,7 @@ void LoopDetectorOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("max_drift_fraction", &max_drift_fraction);
   visitor.Visit("min_drift_allowance", &min_drift_allowance);
   visitor.Visit("max_rotation_drift_deg", &max_rotation_drift_deg);
+  visitor.Visit("loop_consistency_path", &loop_consistency_path);
   visitor.Visit("max_loop_distance", &max_loop_distance);
   visitor.Visit("translation_sigma", &translation_sigma);
   visitor.Visit("rotation_sigma_deg", &rotation_sigma_deg);
@@ -118,6 +119,9 @@ void LoopDetectorOptions::Validate() const {
   }
   if (!(max_drift_fraction > 0) || !(min_drift_allowance > 0) || !(max_rotation_drift_deg > 0)) {
     throw std::invalid_argument("loop_detection drift allowances must be > 0");
+  }
+  if (!(loop_consistency_path >= 0)) {
+    throw std::invalid_argument("loop_detection.loop_consistency_path must be >= 0 (0: off)");
   }
   if (!(max_loop_distance > 0)) {
     throw std::invalid_argument("loop_detection.max_loop_distance must be > 0");

@@ -1,8 +1,8 @@
 // LoopDetector's geometric verification on stereo worlds with known geometry: a true revisit is
 // accepted with the right relative pose; look-alikes elsewhere, which match perfectly by
-// themselves, are rejected: a repeated room by the odometry check within one segment, a
-// repeated poster by the spread check even across segments (where no odometry relates the two
-// keyframes); candidates after an accepted one are not verified.
+// themselves, are rejected: a repeated room by the odometry check within one segment and, across
+// segments, through the query segment's last loop; a repeated poster by the spread check even
+// where nothing relates the two keyframes; candidates after an accepted one are not verified.
 #include "stereo_fabmap_slam/place_recognition/loop_detector.h"
 
 #include <algorithm>
@@ -167,6 +167,51 @@ TEST(LoopDetector, RepeatedRoomWithinASegmentIsRejectedByTheOdometry) {
   EXPECT_FALSE(a->accepted);
   EXPECT_NE(a->reason.find("disagrees with the odometry"), std::string::npos) << a->reason;
   EXPECT_FALSE(detection.loop.has_value());
+}
+
+// After a tracking loss the odometry of the new segment says nothing about the old one, but its
+// last loop does: a look-alike room of the old segment 20 m from where that loop put the camera
+// is refused through the loop, even when FAB-MAP ranks it first (its place words are the
+// query's) and it verifies perfectly; without the check (loop_consistency_path 0) it is taken.
+TEST(LoopDetector, RepeatedRoomAcrossSegmentsIsRejectedThroughTheSegmentsLastLoop) {
+  const StereoWorld world = RepeatedRoomWorld();
+  for (const double consistency_path : {3.0, 0.0}) {
+    SCOPED_TRACE("loop_consistency_path " + std::to_string(consistency_path));
+    place_recognition::LoopDetectorOptions options;
+    options.min_age = 5.0;
+    options.min_probability = 0.0;
+    options.min_log_odds = -std::numeric_limits<double>::infinity();
+    options.sequence_length = 1;
+    options.max_candidates = 5;
+    options.loop_consistency_path = consistency_path;
+    place_recognition::LoopDetector detector = ToyLoopDetector(11, options);
+    detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+    const map::Keyframe at_b = MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(20.05, 0, 0));
+    detector.Process(at_b);
+    // Tracking lost; back at A in a new segment (its own odom frame). Only keyframe 0 is old
+    // enough: a true loop, the segment's first.
+    const LoopDetection first = detector.Process(
+        MakeKeyframe(2, 12.0, world, At(0.1, 0, 0), At(5, 5, 0), /*starts_new_segment=*/true));
+    ASSERT_TRUE(first.loop.has_value());
+    ASSERT_EQ(first.loop->match_id, 0);
+    // 0.2 m further on in the new segment; the room at B looks the same to FAB-MAP and to PnP.
+    map::Keyframe query = MakeKeyframe(3, 20.0, world, At(0.3, 0, 0), At(5.2, 5, 0));
+    query.place_descriptors = at_b.place_descriptors.clone();
+    const LoopDetection detection = detector.Process(query);
+    const LoopCandidate* b = CandidateFor(detection, 1);
+    ASSERT_NE(b, nullptr);
+    ASSERT_TRUE(b->verified);
+    EXPECT_GE(b->inliers, 200);  // geometrically perfect
+    ASSERT_TRUE(detection.loop.has_value());
+    if (consistency_path > 0) {
+      EXPECT_FALSE(b->accepted);
+      EXPECT_NE(b->reason.find("through the loop 2 -> 0"), std::string::npos) << b->reason;
+      EXPECT_EQ(detection.loop->match_id, 0);
+    } else {
+      EXPECT_TRUE(b->accepted) << b->reason;
+      EXPECT_EQ(detection.loop->match_id, 1);
+    }
+  }
 }
 
 TEST(LoopDetector, RepeatedPosterAcrossSegmentsIsRejectedByItsSpread) {

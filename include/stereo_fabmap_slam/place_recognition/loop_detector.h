@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -111,8 +112,18 @@ class LoopDetector {
   // A query of segment -1 (not stored) has no odometry to check the verified pose against.
   LoopDetection Detect(const map::StoredKeyframe& query);
   void AddPlace(const map::StoredKeyframe& stored);
+  // The last loop accepted for a query of one odometry segment.
+  struct AcceptedLoop {
+    std::int64_t query_id = -1;
+    std::int64_t match_id = -1;
+    Eigen::Isometry3d T_match_query = Eigen::Isometry3d::Identity();
+  };
   LoopCandidate Verify(const map::StoredKeyframe& query,
                        const map::StoredKeyframe& candidate) const;
+  // Why a verified T_candidate_query disagrees with where the odometry (and, across segments, the
+  // query segment's last loop) puts the candidate; empty if it agrees or nothing can tell.
+  std::string Disagreement(const map::StoredKeyframe& query, const map::StoredKeyframe& candidate,
+                           const Eigen::Isometry3d& T_candidate_query) const;
   // FAB-MAP over the places `mask` flags, with each one's log odds against a new place in
   // `log_odds` (-infinity for the others); nothing to compare (no place, no word): posterior
   // all 0.
@@ -139,6 +150,8 @@ class LoopDetector {
   SequenceScore sequence_;
   std::int64_t sequence_segment_ = -1;
   std::int64_t sequence_last_id_ = -1;  // the newest keyframe in the sequence
+  // By odometry segment of the query: its last accepted loop (loop_consistency_path).
+  std::map<int, AcceptedLoop> last_loops_;
 };
 
 }  // namespace stereo_fabmap_slam::place_recognition

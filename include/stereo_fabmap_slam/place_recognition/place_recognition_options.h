@@ -147,6 +147,15 @@ struct LoopDetectorOptions {
   double max_drift_fraction = 0.05;
   double min_drift_allowance = 0.3;    // [m]
   double max_rotation_drift_deg = 10;  // [deg] heading the odometry cannot have lost
+  // Across odometry segments the same holds through the last loop accepted for the query's
+  // segment, while the query has gone at most loop_consistency_path since it: the candidate must
+  // sit where that loop and both segments' odometry put it (the same allowances, over both
+  // paths). A revisit is a run of loops that agree; a door of another corridor that passes
+  // verification inside such a run (on a per-seed office loop, 13 m from the truth between
+  // loops to the right corridor) does not. 3 m: a run of loops on a corridor walked again spans
+  // metres, and a wrong loop taken as the reference (one that opened a run) blocks the true
+  // ones for no longer than that.
+  double loop_consistency_path = 3.0;  // [m]
   // Only loops between nearby views: the farther apart two cameras are, the less near
   // structure they share and the worse PnP measures their relative pose. Keyframes are at most
   // 0.25 m apart along the path (keyframes.max_translation), so a true revisit passes within
