@@ -41,9 +41,14 @@ struct RelocalizerOptions {
   // elsewhere (a poster, a sign) cannot place the camera alone. Loop detection asks for 6 and has
   // the odometry as a second check; without it, 8 cells: half the image.
   int min_inlier_cells = 8;
-  // Automatic recovery after tracking loss: attempt on every n-th frame while lost. 1: every
-  // frame; an attempt costs a few ms against the tracker's 6-8 ms and the 50 ms of a 20 Hz frame.
-  int attempt_every_n_frames = 1;
+  // Automatic recovery after tracking loss: attempt on every n-th frame while lost. An attempt
+  // costs 6-9 ms in the hall, where the first candidate passes, but 34-40 ms median in the
+  // office, where look-alike candidates fail one after another: on the per-seed office routes,
+  // whose segments stay unjoined for long, attempts on every frame were a quarter to a third of
+  // run_dataset's time. 4 (0.2 s at 20 Hz, 0.2 m at 1 m/s) delays a join by no more than that,
+  // while a confirmation needs confirm_distance (1.5 m) of travel anyway, and the segment's
+  // keyframes look for loops at every keyframe meanwhile.
+  int attempt_every_n_frames = 4;
   // Mapping, after a loss: the first success is a candidate; a second one from a camera at
   // least confirm_distance (straight line, in the new segment's odometry) from where the
   // candidate was found must put the camera where the first one's map -> odom does before a
