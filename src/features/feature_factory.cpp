@@ -55,7 +55,7 @@ DescriptorKind CreateDescriptor(const FeatureOptions& options) {
   const std::string& name = options.descriptor;
   // Distance limits: a fifth of the bits for binary descriptors (unrelated ones differ in about
   // half); for SIFT (unit vectors scaled to 512) about half the distance of unrelated ones.
-  if (name == "BRISK") return {cv::BRISK::create(), cv::NORM_HAMMING, 0.2 * 512};
+  if (name == "BRISK") return {cv::BRISK::create(), cv::NORM_HAMMING, 0.2 * 512, true};
   if (name == "ORB") return {cv::ORB::create(), cv::NORM_HAMMING, 0.2 * 256};
   if (name == "AKAZE") {
     if (options.detector != "AKAZE") {

@@ -14,7 +14,8 @@ StereoFeatureExtractor::StereoFeatureExtractor(const FeatureOptions& feature_opt
       left_detector_(feature_options, /*stereo_candidates=*/false),
       right_detector_(feature_options, /*stereo_candidates=*/true),
       descriptor_(CreateDescriptor(feature_options)),
-      second_extractor_(CreateDescriptor(feature_options).extractor),
+      second_extractor_(descriptor_.shareable ? descriptor_.extractor
+                                              : CreateDescriptor(feature_options).extractor),
       matcher_(stereo_options, camera, descriptor_.norm, descriptor_.max_match_distance,
                feature_options.parallel) {}
 

@@ -10,7 +10,13 @@ StereoFrontEnd::StereoFrontEnd(const FrontEndOptions& options, camera::StereoRec
       tracker_(options.tracker, options.keyframes, rectifier_.camera(),
                extractor_.descriptor_norm(), extractor_.max_match_distance()) {
   if (options.place_features) {
-    place_describer_ = std::make_unique<place_recognition::ImageDescriber>(*options.place_features);
+    // The odometry's descriptor instance when the places use the same descriptor and it can be
+    // shared (BRISK: one 47 MB table instead of two).
+    const features::DescriptorKind& odometry = extractor_.descriptor();
+    place_describer_ =
+        options.place_features->descriptor == options.features.descriptor && odometry.shareable
+            ? std::make_unique<place_recognition::ImageDescriber>(*options.place_features, odometry)
+            : std::make_unique<place_recognition::ImageDescriber>(*options.place_features);
   }
 }
 

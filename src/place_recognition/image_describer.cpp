@@ -1,13 +1,19 @@
 #include "stereo_fabmap_slam/place_recognition/image_describer.h"
 
+#include <utility>
+
 #include "stereo_fabmap_slam/features/anms.h"
 
 namespace stereo_fabmap_slam::place_recognition {
 
 ImageDescriber::ImageDescriber(const features::FeatureOptions& options)
+    : ImageDescriber(options, features::CreateDescriptor(options)) {}
+
+ImageDescriber::ImageDescriber(const features::FeatureOptions& options,
+                               features::DescriptorKind descriptor)
     : options_((options.Validate(), options)),
       detector_(options, /*stereo_candidates=*/false),
-      descriptor_(features::CreateDescriptor(options)) {}
+      descriptor_(std::move(descriptor)) {}
 
 cv::Mat ImageDescriber::Describe(const cv::Mat& image) {
   return Compute(image, detector_.Detect(image));

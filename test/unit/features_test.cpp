@@ -87,6 +87,34 @@ TEST_F(RealStereoPair, BandDetectionEqualsWholeImage) {
   EXPECT_EQ(a, b);
 }
 
+// The extractor describes the two halves of the left key points on two threads with one BRISK
+// instance (its 47 MB pattern table once, DescriptorKind::shareable): the descriptors must be
+// those of one thread, bit for bit, every time (20 pairs of calls: a race on shared state would
+// show as differing bits).
+TEST_F(RealStereoPair, DescriptionOnTwoThreadsWithOneBriskEqualsOneThread) {
+  FeatureOptions options;
+  options.adaptive_threshold = false;
+  ASSERT_EQ(options.descriptor, "BRISK");
+  ASSERT_TRUE(CreateDescriptor(options).shareable);
+  const geometry::StereoCamera& camera = rectifier_.camera();
+  StereoMatcherOptions stereo;
+  FeatureOptions serial_options = options;
+  serial_options.parallel = false;
+  options.parallel = true;
+  StereoFeatureExtractor parallel(options, stereo, camera);
+  StereoFeatureExtractor serial(serial_options, stereo, camera);
+  const StereoFeatureExtractor::Detected detected = serial.Detect(left_, right_);
+  ASSERT_GT(detected.left.size(), 300u);
+  const StereoFeatureExtractor::Described expected = serial.Describe(left_, right_, detected);
+  for (int run = 0; run < 20; ++run) {
+    const StereoFeatureExtractor::Described described = parallel.Describe(left_, right_, detected);
+    ASSERT_EQ(described.left.size(), expected.left.size());
+    ASSERT_EQ(cv::norm(described.left_descriptors, expected.left_descriptors, cv::NORM_HAMMING),
+              0.0)
+        << "run " << run;
+  }
+}
+
 TEST_F(RealStereoPair, TriangulatedDepthsAgreeWithDisparity) {
   StereoFeatureExtractor extractor(FeatureOptions{}, StereoMatcherOptions{}, rectifier_.camera());
   const StereoFeatures features = extractor.Extract(left_, right_);

@@ -19,6 +19,11 @@ struct DescriptorKind {
   cv::Ptr<cv::DescriptorExtractor> extractor;
   int norm = cv::NORM_HAMMING;    // NORM_HAMMING for binary descriptors, NORM_L2 for float ones
   double max_match_distance = 0;  // beyond this two descriptors are never the same point
+  // Its compute() keeps no state between calls, so one instance may serve several threads and
+  // users: checked for BRISK in OpenCV 4.6 (computeDescriptorsAndOrOrientation is const and
+  // works on local buffers), whose instance holds a 47 MB pattern table (64 scales x 1,024
+  // rotations x 60 points). Not claimed for the others.
+  bool shareable = false;
 };
 
 // Distance between row `i` of `a` and row `j` of `b` under `norm` (Hamming on raw bytes for

@@ -41,6 +41,7 @@ class StereoFeatureExtractor {
   StereoFeatures Match(const cv::Mat& left, const cv::Mat& right, Described described) const;
   StereoFeatures Extract(const cv::Mat& left, const cv::Mat& right);
 
+  const DescriptorKind& descriptor() const { return descriptor_; }
   int descriptor_norm() const { return descriptor_.norm; }
   double max_match_distance() const { return descriptor_.max_match_distance; }
   const geometry::StereoCamera& camera() const { return camera_; }
@@ -52,7 +53,8 @@ class StereoFeatureExtractor {
   geometry::StereoCamera camera_;
   AdaptiveDetector left_detector_, right_detector_;
   DescriptorKind descriptor_;
-  cv::Ptr<cv::DescriptorExtractor> second_extractor_;  // for the second thread: no shared state
+  // For the second thread: the same one if it is shareable, else its own.
+  cv::Ptr<cv::DescriptorExtractor> second_extractor_;
   StereoMatcher matcher_;
 };
 

@@ -15,6 +15,9 @@ namespace stereo_fabmap_slam::place_recognition {
 class ImageDescriber {
  public:
   explicit ImageDescriber(const features::FeatureOptions& options);
+  // The same with a descriptor instance made for `options.descriptor` elsewhere (shareable: a
+  // BRISK's 47 MB table once per process, not once per user).
+  ImageDescriber(const features::FeatureOptions& options, features::DescriptorKind descriptor);
   // Descriptors of a mono8 image, one per row (CV_8U binary or CV_32F).
   cv::Mat Describe(const cv::Mat& image);
   // The same for an image outside the stream: the detector's threshold does not adapt.
