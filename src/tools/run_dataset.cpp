@@ -1,5 +1,6 @@
 // Runs the odometry offline on an EuRoC ASL sequence, in one thread and deterministically, and
 // writes trajectory.txt, keyframes.txt, timing.csv and summary.json.
+#include <dlfcn.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
@@ -18,10 +20,9 @@
 #include <vector>
 
 #include "command_line.h"
+#include "dense_run.h"
 #include "slam_configuration.h"
 #include "stereo_fabmap_slam/datasets/euroc_sequence.h"
-#include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
-#include "stereo_fabmap_slam/dense/surface_comparison.h"
 #include "stereo_fabmap_slam/evaluation/trajectory_metrics.h"
 #include "stereo_fabmap_slam/io/trajectory_file.h"
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
@@ -83,82 +84,31 @@ double PeakResidentMegabytes() {
   return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
 }
 
-// run_dataset --dense: the dense mapping stage beside the SLAM as the DenseMapper runs it in the
-// graph, in order: every pair and keyframe handed over as it comes, the map after every frame
-// that changed it, one step after each frame; at the end, steps until every keyframe the map
-// moved is fused at its final pose.
-class DenseRun {
- public:
-  DenseRun(const tools::SlamConfiguration& options, const camera::StereoRectifier& rectifier,
-           bool quiet)
-      : stage_(options.dense_mapping, options.dense_depth, options.dense_fusion, rectifier),
-        quiet_(quiet) {}
-
-  void AfterFrame(const datasets::StereoImages& images, const pipeline::FrameRecord* frame,
-                  const pipeline::StereoSlam& slam) {
-    const double start = NowMs();
-    stage_.AddPair(dense::DenseStereoPair{images.timestamp_ns, images.left, images.right});
-    if (frame != nullptr && frame->is_keyframe) {
-      // The tracker's reference is the keyframe it has just made.
-      stage_.AddKeyframe(dense::DenseKeyframe{static_cast<std::uint64_t>(frame->reference_keyframe),
-                                              images.timestamp_ns, frame->T_world_camera});
-    }
-    // The map changes with a keyframe (bundle adjustment, a loop) or a relocalization's edge.
-    if (frame != nullptr && (frame->is_keyframe || frame->relocalized)) SetMap(slam);
-    Step();
-    ms_ += NowMs() - start;
+// Loads the dense mapping library (dense_run.h) and makes its DenseRun; the library stays loaded
+// until the process ends. Looked up as the dynamic linker finds libraries (this program's run
+// path: the build's or the install's lib directory), then beside this program's directory.
+std::unique_ptr<tools::DenseRun> LoadDenseRun(const tools::SlamConfiguration& options,
+                                              const camera::StereoRectifier& rectifier,
+                                              bool quiet) {
+  void* library = dlopen(tools::kDenseRunLibrary, RTLD_NOW | RTLD_LOCAL);
+  std::string error = library == nullptr ? dlerror() : "";
+  if (library == nullptr) {
+    const std::filesystem::path beside =
+        std::filesystem::read_symlink("/proc/self/exe").parent_path().parent_path() /
+        tools::kDenseRunLibrary;
+    library = dlopen(beside.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (library == nullptr) error += "; " + std::string(dlerror());
   }
-
-  void Finish(const pipeline::StereoSlam& slam) {
-    const double start = NowMs();
-    SetMap(slam);
-    do Step();
-    while (stage_.busy());
-    ms_ += NowMs() - start;
+  if (library == nullptr) throw std::runtime_error("--dense: cannot load the dense map: " + error);
+  const auto create =
+      reinterpret_cast<tools::CreateDenseRunFunction>(dlsym(library, tools::kCreateDenseRunSymbol));
+  if (create == nullptr) {
+    throw std::runtime_error("--dense: " + std::string(tools::kDenseRunLibrary) + " has no " +
+                             tools::kCreateDenseRunSymbol);
   }
-
-  void Write(const std::string& output, pipeline::JsonObject* summary) const {
-    const dense::KeyframeVolume& volume = stage_.volume();
-    const dense::Mesh mesh = stage_.SaveMesh(output + "/mesh.ply");
-    stage_.SaveCloud(output + "/dense_cloud.ply");
-    std::vector<double> depth_ms, fusion_ms;
-    for (const dense::KeyframeVolume::Timing& timing : stage_.fused_timings()) {
-      depth_ms.push_back(timing.depth_ms);
-      fusion_ms.push_back(timing.fusion_ms);
-    }
-    summary->Add("dense_keyframes", depth_ms.size());
-    summary->Add("dense_keyframes_moved", moved_);
-    summary->Add("dense_depth_ms_median", dense::Quantile(depth_ms, 0.5), 3);
-    summary->Add("dense_fusion_ms_median", dense::Quantile(fusion_ms, 0.5), 3);
-    summary->Add("dense_time_s", ms_ / 1000.0, 3);
-    summary->Add("dense_mesh_vertices", mesh.vertices.size());
-    summary->Add("dense_mesh_triangles", mesh.triangles.size());
-    summary->Add("dense_mesh_area_m2", dense::SurfaceArea(mesh.vertices, mesh.triangles), 1);
-    summary->Add("dense_blocks", volume.fusion().blocks());
-    summary->Add("dense_volume_mb", volume.fusion().memory_bytes() / 1048576.0, 1);
-    summary->Add("dense_memory_mb", volume.memory_bytes() / 1048576.0, 1);
-  }
-
- private:
-  void SetMap(const pipeline::StereoSlam& slam) {
-    std::map<std::uint64_t, Eigen::Isometry3d> poses;
-    for (const auto& [id, pose] : slam.mapping().MapPoses())
-      poses.emplace(static_cast<std::uint64_t>(id), pose);
-    stage_.SetMap(slam.mapping().MapToOdom(), std::move(poses));
-  }
-
-  void Step() {
-    const dense::DenseStepReport report = stage_.Step();
-    for (const std::string& left_out : report.left_out)
-      if (!quiet_) std::fprintf(stderr, "dense map: %s\n", left_out.c_str());
-    moved_ += report.moved;
-  }
-
-  dense::DenseMappingStage stage_;
-  bool quiet_;
-  std::size_t moved_ = 0;  // re-integrations at a pose the map moved
-  double ms_ = 0;          // all the dense mapping took
-};
+  return std::unique_ptr<tools::DenseRun>(
+      create(options.dense_mapping, options.dense_depth, options.dense_fusion, rectifier, quiet));
+}
 
 }  // namespace
 
@@ -246,8 +196,8 @@ int main(int argc, char** argv) {
       slam.SetMode(mode);
     }
     const std::size_t loaded_keyframes = slam.mapping().pose_graph().size();
-    std::optional<DenseRun> dense_run;
-    if (args->Flag("dense")) dense_run.emplace(options, rectifier, quiet);
+    std::unique_ptr<tools::DenseRun> dense_run;
+    if (args->Flag("dense")) dense_run = LoadDenseRun(options, rectifier, quiet);
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();
