@@ -23,15 +23,17 @@ using place_recognition::LoopDetection;
 
 // A small vocabulary and Chow-Liu tree trained on random descriptors: FAB-MAP is not what these
 // tests measure (every stored keyframe is verified: no floor, one view ranks alone).
-place_recognition::LoopDetector MakeDetector() {
+place_recognition::LoopDetectorOptions DetectorOptions() {
   place_recognition::LoopDetectorOptions options;
   options.min_age = 5.0;
   options.min_probability = 0.0;
   options.min_log_odds = -std::numeric_limits<double>::infinity();
   options.sequence_length = 1;
   options.max_candidates = 5;
-  return ToyLoopDetector(11, options);
+  return options;
 }
+
+place_recognition::LoopDetector MakeDetector() { return ToyLoopDetector(11, DetectorOptions()); }
 
 Eigen::Isometry3d At(double x, double y, double z) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -177,12 +179,7 @@ TEST(LoopDetector, RepeatedRoomAcrossSegmentsIsRejectedThroughTheSegmentsLastLoo
   const StereoWorld world = RepeatedRoomWorld();
   for (const double consistency_path : {3.0, 0.0}) {
     SCOPED_TRACE("loop_consistency_path " + std::to_string(consistency_path));
-    place_recognition::LoopDetectorOptions options;
-    options.min_age = 5.0;
-    options.min_probability = 0.0;
-    options.min_log_odds = -std::numeric_limits<double>::infinity();
-    options.sequence_length = 1;
-    options.max_candidates = 5;
+    place_recognition::LoopDetectorOptions options = DetectorOptions();
     options.loop_consistency_path = consistency_path;
     place_recognition::LoopDetector detector = ToyLoopDetector(11, options);
     detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
