@@ -6,6 +6,7 @@
 
 #include "stereo_fabmap_slam/dense/mesh_simplification.h"
 #include "stereo_fabmap_slam/dense/ply_files.h"
+#include "stereo_fabmap_slam/dense/surface_comparison.h"
 
 namespace stereo_fabmap_slam::dense {
 
@@ -90,7 +91,16 @@ DenseStepReport DenseMappingStage::Step() {
     report.still_moving = report.moved == most ? volume_.Moving(map_poses_) : 0;
     moves_pending_ = report.still_moving > 0;
   }
+  view_changed_ = view_changed_ || report.changed();
   return report;
+}
+
+double DenseMappingStage::RecentFuseMedianMs(std::size_t count) const {
+  const std::size_t first = fused_timings_.size() - std::min(count, fused_timings_.size());
+  std::vector<double> fuse_ms;
+  for (std::size_t k = first; k < fused_timings_.size(); ++k)
+    fuse_ms.push_back(fused_timings_[k].depth_ms + fused_timings_[k].fusion_ms);
+  return fuse_ms.empty() ? 0.0 : Quantile(fuse_ms, 0.5);
 }
 
 Mesh DenseMappingStage::ViewerMesh(std::size_t max_triangles) const {

@@ -28,7 +28,6 @@
 #include "dense_messages.h"
 #include "dense_wiring.h"
 #include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
-#include "stereo_fabmap_slam/dense/surface_comparison.h"
 #include "stereo_image_input.h"
 
 namespace stereo_fabmap_slam {
@@ -58,8 +57,7 @@ class DenseMapperNodelet : public nodelet::Nodelet {
   // The worker's, and the save services' (set once, when the calibration is known).
   std::mutex stage_mutex_;
   std::optional<dense::DenseMappingStage> stage_;
-  ros_wiring::DenseMapperQueue inputs_;   // in the order they arrived: the stage takes them so
-  bool changed_since_published_ = false;  // worker only
+  ros_wiring::DenseMapperQueue inputs_;  // in the order they arrived: the stage takes them so
 
   std::thread worker_;
   std::unique_ptr<ros_input::StereoImageInput> input_;
@@ -151,6 +149,7 @@ void DenseMapperNodelet::Work() {
   auto last_published = std::chrono::steady_clock::now();
   bool busy = false;  // the stage has work left: take what came meanwhile and go on at once
   while (const auto inputs = inputs_.TakeAll(busy ? std::chrono::duration<double>(0) : period)) {
+    bool changed = false;  // since the view was last sent
     {
       std::lock_guard<std::mutex> lock(stage_mutex_);
       if (!stage_) continue;  // not calibrated yet (camera_info): what came is of no use
@@ -164,8 +163,9 @@ void DenseMapperNodelet::Work() {
         NODELET_ERROR_STREAM_THROTTLE(10.0, "dense mapping: " << error.what());
       }
       busy = stage_->busy();
+      changed = stage_->view_changed();
     }
-    if (changed_since_published_ && std::chrono::steady_clock::now() - last_published >= period) {
+    if (changed && std::chrono::steady_clock::now() - last_published >= period) {
       Publish();
       last_published = std::chrono::steady_clock::now();
     }
@@ -175,7 +175,6 @@ void DenseMapperNodelet::Work() {
 void DenseMapperNodelet::Report(const dense::DenseStepReport& report) {
   for (const std::string& left_out : report.left_out)
     NODELET_WARN_STREAM(left_out << ": it stays out of the dense map");
-  if (report.changed()) changed_since_published_ = true;
   if (report.moved > 0) {
     NODELET_INFO_STREAM_THROTTLE(5.0,
                                  "keyframes moved by the map are fused again at their new "
@@ -189,14 +188,11 @@ void DenseMapperNodelet::Report(const dense::DenseStepReport& report) {
       timings.size() / kLogEvery == (timings.size() - report.fused.size()) / kLogEvery) {
     return;
   }
-  std::vector<double> fuse_ms;
-  for (std::size_t k = timings.size() - kLogEvery; k < timings.size(); ++k)
-    fuse_ms.push_back(timings[k].depth_ms + timings[k].fusion_ms);
   const dense::KeyframeVolume& volume = stage_->volume();
   NODELET_INFO(
       "%zu keyframes fused (depth + fusion: median %.1f ms over the last %zu), %zu blocks, %.0f MB",
-      volume.keyframes(), dense::Quantile(fuse_ms, 0.5), kLogEvery, volume.fusion().blocks(),
-      volume.memory_bytes() / 1048576.0);
+      volume.keyframes(), stage_->RecentFuseMedianMs(kLogEvery), kLogEvery,
+      volume.fusion().blocks(), volume.memory_bytes() / 1048576.0);
 }
 
 void DenseMapperNodelet::Publish() {
@@ -211,8 +207,8 @@ void DenseMapperNodelet::Publish() {
     if (!stage_) return;
     if (cloud_wanted) cloud = stage_->volume().ExtractCloud();
     if (mesh_wanted) mesh = stage_->ViewerMesh(max_triangles);
+    stage_->ViewSent();
   }
-  changed_since_published_ = false;
   const ros::Time stamp = ros::Time::now();
   if (cloud) {
     cloud_publisher_.publish(ros_visualization::DenseCloudMessage(*cloud, parameters_.cloud_cell,

@@ -362,9 +362,15 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingStageFusesKeyframesWithTheirPairsAnd
   DenseStepReport report = stage.Step();
   ASSERT_EQ(report.fused.size(), 1u);
   EXPECT_EQ(report.fused[0].id, 1u);
+  // The view (cloud, mesh) is worth sending again after a change only.
+  EXPECT_TRUE(stage.view_changed());
+  stage.ViewSent();
+  EXPECT_DOUBLE_EQ(stage.RecentFuseMedianMs(20),
+                   report.fused[0].timing.depth_ms + report.fused[0].timing.fusion_ms);
   stage.AddKeyframe({2, kSecond, second_odom});  // before its pair
   EXPECT_FALSE(stage.busy());
   EXPECT_TRUE(stage.Step().fused.empty());
+  EXPECT_FALSE(stage.view_changed());
   stage.AddPair({kSecond, second.left_raw, second.right_raw});
   report = stage.Step();
   ASSERT_EQ(report.fused.size(), 1u);
@@ -374,9 +380,11 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingStageFusesKeyframesWithTheirPairsAnd
   // The map corrects both: keyframe 2, which moved most, first; one a step.
   stage.SetMap(Eigen::Isometry3d::Identity(),
                {{1, RectifiedLeftPose(2.0)}, {2, RectifiedLeftPose(3.0)}});
+  stage.ViewSent();
   report = stage.Step();
   EXPECT_EQ(report.moved, 1u);
   EXPECT_EQ(report.still_moving, 1u);
+  EXPECT_TRUE(stage.view_changed()) << "a keyframe fused again where the map moved it";
   EXPECT_TRUE(stage.busy());
   report = stage.Step();
   EXPECT_EQ(report.moved, 1u);

@@ -80,6 +80,13 @@ class DenseMappingStage {
   // Depth and fusion times of every new keyframe fused so far, in order (not the moves): what
   // the nodelet's log and run_dataset's summary report.
   const std::vector<KeyframeVolume::Timing>& fused_timings() const { return fused_timings_; }
+  // Median depth + fusion time [ms] of the last `count` new keyframes fused (fewer if fewer
+  // were); 0 before the first.
+  double RecentFuseMedianMs(std::size_t count) const;
+  // Whether a step changed the map (new keyframes fused, or moved ones fused again) since the
+  // view (cloud, mesh) was last sent: a viewer's output need not be rebuilt otherwise.
+  bool view_changed() const { return view_changed_; }
+  void ViewSent() { view_changed_ = false; }
   // The mesh and the point cloud written as PLY files (dense/ply_files.h); the mesh is returned
   // for what the caller reports of it, the cloud's point count likewise. Throw on I/O errors.
   Mesh SaveMesh(const std::string& path) const;
@@ -107,6 +114,7 @@ class DenseMappingStage {
   std::map<std::uint64_t, Eigen::Isometry3d> map_poses_;
   bool moves_pending_ = false;
   std::vector<KeyframeVolume::Timing> fused_timings_;
+  bool view_changed_ = false;
 };
 
 }  // namespace stereo_fabmap_slam::dense
