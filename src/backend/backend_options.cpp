@@ -49,7 +49,6 @@ void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("gap_translation_sigma_per_second", &gap_translation_sigma_per_second);
   visitor.Visit("gap_rotation_sigma_deg_per_second", &gap_rotation_sigma_deg_per_second);
   visitor.Visit("gap_chi2", &gap_chi2);
-  visitor.Visit("refinement_iterations", &refinement_iterations);
 }
 
 void PoseGraphOptions::Validate() const {
@@ -72,10 +71,6 @@ void PoseGraphOptions::Validate() const {
   RequirePositive("gap_translation_sigma_per_second", gap_translation_sigma_per_second);
   RequirePositive("gap_rotation_sigma_deg_per_second", gap_rotation_sigma_deg_per_second);
   RequirePositive("gap_chi2", gap_chi2);
-  if (refinement_iterations < 0) {
-    throw std::invalid_argument("pose_graph.refinement_iterations must be >= 0, got " +
-                                std::to_string(refinement_iterations));
-  }
 }
 
 }  // namespace stereo_fabmap_slam::backend

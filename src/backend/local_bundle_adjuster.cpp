@@ -152,16 +152,4 @@ std::map<std::int64_t, Eigen::Isometry3d> LocalBundleAdjuster::KeyframePoses() c
   return poses;
 }
 
-std::vector<PointTrack> LocalBundleAdjuster::Tracks(const std::set<std::int64_t>& keyframes) const {
-  std::vector<PointTrack> tracks;
-  for (const auto& [id, point] : points_) {
-    PointTrack track{point.position, {}};
-    for (const Observation& o : point.observations) {
-      if (keyframes.count(o.keyframe)) track.observations.push_back(o);
-    }
-    if (track.observations.size() >= 2) tracks.push_back(std::move(track));
-  }
-  return tracks;
-}
-
 }  // namespace stereo_fabmap_slam::backend

@@ -335,9 +335,10 @@ void PoseGraph::Solve(const std::vector<bool>& moving, const std::vector<std::si
     Keyframe& b = keyframes_[i];
     if (a.segment != b.segment || !(moving[i - 1] || moving[i])) continue;
     problem.AddResidualBlock(
-        geometry::RelativePoseError::Create(OdometryStep(i), odometry_sqrt_information_), nullptr,
-        a.q_map_camera.coeffs().data(), a.t_map_camera.data(), b.q_map_camera.coeffs().data(),
-        b.t_map_camera.data());
+        geometry::RelativePoseError::Create(a.T_odom_camera.inverse() * b.T_odom_camera,
+                                            odometry_sqrt_information_),
+        nullptr, a.q_map_camera.coeffs().data(), a.t_map_camera.data(),
+        b.q_map_camera.coeffs().data(), b.t_map_camera.data());
   }
   // Gaps kept and tried have the loops' robust loss: a wrong one pulls little before it is
   // refused.
@@ -415,28 +416,6 @@ std::map<std::int64_t, Eigen::Isometry3d> PoseGraph::MapPoses() const {
   return poses;
 }
 
-void PoseGraph::AdoptRefinement(const std::map<std::int64_t, Eigen::Isometry3d>& T_map_camera) {
-  std::vector<bool> refined(keyframes_.size(), false);
-  for (const auto& [id, pose] : T_map_camera) {
-    const std::size_t i = IndexOf(id);
-    keyframes_[i].SetMapPose(pose);
-    refined[i] = true;
-  }
-  for (std::size_t i = 1; i < keyframes_.size(); ++i) {
-    if (!refined[i] || !refined[i - 1] || keyframes_[i].segment != keyframes_[i - 1].segment) {
-      continue;
-    }
-    keyframes_[i].T_previous_camera_refined =
-        keyframes_[i - 1].MapPose().inverse() * keyframes_[i].MapPose();
-  }
-}
-
-Eigen::Isometry3d PoseGraph::OdometryStep(std::size_t i) const {
-  const Keyframe& b = keyframes_[i];
-  if (b.T_previous_camera_refined) return *b.T_previous_camera_refined;
-  return keyframes_[i - 1].T_odom_camera.inverse() * b.T_odom_camera;
-}
-
 Eigen::Isometry3d PoseGraph::MapToOdom() const {
   if (keyframes_.empty()) return Eigen::Isometry3d::Identity();
   const Keyframe& newest = keyframes_.back();
@@ -449,8 +428,8 @@ std::vector<PoseGraphEdge> PoseGraph::Edges() const {
     const Keyframe& a = keyframes_[i - 1];
     const Keyframe& b = keyframes_[i];
     if (a.segment != b.segment) continue;
-    edges.push_back(
-        {a.id, b.id, OdometryStep(i), odometry_information_, PoseGraphEdgeType::kOdometry});
+    edges.push_back({a.id, b.id, a.T_odom_camera.inverse() * b.T_odom_camera, odometry_information_,
+                     PoseGraphEdgeType::kOdometry});
   }
   for (const Gap& gap : gaps_) {
     if (gap.state != Gap::State::kKept) continue;

@@ -2,12 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <set>
 #include <stdexcept>
 #include <string>
 
-#include "stereo_fabmap_slam/backend/map_refinement.h"
 #include "stereo_fabmap_slam/io/input_error.h"
 
 namespace stereo_fabmap_slam::pipeline {
@@ -62,7 +59,6 @@ MappingBatchResult MappingStage::Take(const std::vector<MappingInput>& batch) {
                             " keyframes added in one optimisation";
   }
   const std::uint64_t optimisations = optimisations_;
-  const std::uint64_t refinements = refinements_;
   std::size_t seen = 0;
   for (std::size_t index = 0; index < batch.size(); ++index) {
     const bool keyframe = std::holds_alternative<KeyframeInput>(batch[index]);
@@ -80,11 +76,6 @@ MappingBatchResult MappingStage::Take(const std::vector<MappingInput>& batch) {
         std::to_string(graph_.size()) + " keyframes optimised (" +
         (last_optimisation_.local ? "near loops that agree with the map" : "whole graph") +
         ") in " + std::to_string(last_optimisation_.iterations) + " iterations");
-  }
-  if (refinements_ > refinements) {
-    result.news.push_back("map refined: " + std::to_string(last_refinement_.keyframes) +
-                          " keyframes, " + std::to_string(last_refinement_.points) + " points in " +
-                          std::to_string(last_refinement_ms_) + " ms");
   }
   return result;
 }
@@ -240,46 +231,7 @@ double MappingStage::Optimise() {
   const double start = clock_();
   last_optimisation_ = graph_.Optimize();
   ++optimisations_;
-  // A loop that corrected drift moved the whole graph by its fixed edge uncertainties; the
-  // points then say how the correction is really shared out along the chains. Loops that agree
-  // with the map (local optimisations, nearly every keyframe on a route driven again) correct
-  // too little to be worth a bundle adjustment of the map.
-  if (pose_graph_options_.refinement_iterations > 0 && !last_optimisation_.local &&
-      last_optimisation_.iterations > 0 && bundle_adjuster_) {
-    RefineMap();
-  }
   return clock_() - start;
-}
-
-void MappingStage::RefineMap() {
-  const double start = clock_();
-  const std::map<std::int64_t, Eigen::Isometry3d> odometry = bundle_adjuster_->KeyframePoses();
-  std::map<std::int64_t, backend::RefinementKeyframe> keyframes;
-  std::set<std::int64_t> tracked;
-  for (const auto& [id, T_map_camera] : graph_.MapPoses()) {
-    if (!graph_.InMap(id)) continue;
-    backend::RefinementKeyframe& keyframe = keyframes[id];
-    keyframe.T_map_camera = T_map_camera;
-    // The map's oldest keyframe is its gauge; a loaded map's keyframes have no points here and
-    // stay as they are.
-    keyframe.fixed = keyframes.size() == 1;
-    const auto odom = odometry.find(id);
-    if (odom != odometry.end()) {
-      keyframe.T_odom_camera = odom->second;
-      tracked.insert(id);
-    }
-  }
-  backend::MapRefinement::Options options;
-  options.iterations = pose_graph_options_.refinement_iterations;
-  options.sigma = bundle_adjustment_options_.sigma;
-  options.loop_loss_scale = pose_graph_options_.loop_loss_scale;
-  options.threads = bundle_adjustment_options_.threads;
-  const backend::RefinementResult refined = backend::MapRefinement::Refine(
-      options, *camera_, keyframes, bundle_adjuster_->Tracks(tracked), LoopEdges());
-  graph_.AdoptRefinement(refined.T_map_camera);
-  last_refinement_ = refined.summary;
-  last_refinement_ms_ = clock_() - start;
-  ++refinements_;
 }
 
 void MappingStage::SetMode(SlamMode mode) {

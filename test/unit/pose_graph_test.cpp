@@ -519,8 +519,7 @@ TEST(PoseGraphTest, VisitListsEveryFieldOnce) {
             "  gap_max_seconds: 1\n"
             "  gap_translation_sigma_per_second: 0.25\n"
             "  gap_rotation_sigma_deg_per_second: 10\n"
-            "  gap_chi2: 16.8\n"
-            "  refinement_iterations: 10\n");
+            "  gap_chi2: 16.8\n");
 }
 
 }  // namespace

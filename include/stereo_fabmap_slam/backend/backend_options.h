@@ -71,10 +71,6 @@ struct PoseGraphOptions {
   // quantile of a 6-dof chi-square): what the motion model bridged agrees with the map. A
   // kidnap (the camera jumped metres) is thousands of sigmas off and is taken out again.
   double gap_chi2 = 16.8;
-  // After an optimisation of the whole graph (a loop that corrected drift), the map's keyframes
-  // and the points they share are refined together with the loop edges (MapRefinement), in
-  // rounds of this many Levenberg-Marquardt iterations; 0: no refinement.
-  int refinement_iterations = 10;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;

@@ -3,7 +3,6 @@
 #include <cstdint>
 #include <deque>
 #include <map>
-#include <set>
 #include <unordered_map>
 #include <vector>
 
@@ -16,17 +15,6 @@
 #include "stereo_fabmap_slam/map/keyframe_update.h"
 
 namespace stereo_fabmap_slam::backend {
-
-// A map point as the keyframes measured it: position (odom frame) and one stereo or mono key
-// point per keyframe that saw it.
-struct PointTrack {
-  struct Observation {
-    std::int64_t keyframe;
-    float u, v, u_right;  // u_right < 0: mono
-  };
-  Eigen::Vector3d position;
-  std::vector<Observation> observations;
-};
 
 // Windowed bundle adjustment with Ceres: the last `window` keyframes and the points they see,
 // stereo reprojection residuals (u_left, v, u_right) with a Huber loss; the oldest keyframes of
@@ -47,12 +35,11 @@ class LocalBundleAdjuster {
   // Latest pose (T_world_camera) of every keyframe so far, by id.
   std::map<std::int64_t, Eigen::Isometry3d> KeyframePoses() const;
 
-  // The points that at least two of `keyframes` see, with those keyframes' observations only
-  // (what a refinement of those keyframes can use).
-  std::vector<PointTrack> Tracks(const std::set<std::int64_t>& keyframes) const;
-
  private:
-  using Observation = PointTrack::Observation;
+  struct Observation {
+    std::int64_t keyframe;
+    float u, v, u_right;
+  };
   struct Point {
     Eigen::Vector3d position;
     std::vector<Observation> observations;

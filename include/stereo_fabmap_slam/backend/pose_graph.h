@@ -3,7 +3,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
-#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -90,12 +89,6 @@ class PoseGraph {
   // disagrees, and local_keyframes 0 optimise every piece with loops.
   PoseGraphSummary Optimize();
 
-  // A refinement of the map (MapRefinement: bundle adjustment of the map's keyframes and points
-  // with the loop edges) moved these keyframes: their map poses become the refined ones, and
-  // between two consecutive refined keyframes of a segment the odometry edge measures the
-  // refined step from now on, so that later optimisations start from, and keep, what the points
-  // said. Throws std::invalid_argument for unknown ids.
-  void AdoptRefinement(const std::map<std::int64_t, Eigen::Isometry3d>& T_map_camera);
   bool Contains(std::int64_t id) const;
   // Whether loop or relocalization edges join the two keyframes' segments (one map); throws
   // std::invalid_argument for unknown ids.
@@ -119,9 +112,6 @@ class PoseGraph {
     std::int64_t id;
     int segment;
     Eigen::Isometry3d T_odom_camera;
-    // The step from the previous keyframe as a refinement of the map measured it (both
-    // refined, one segment); the odometry edge's measurement instead of the odometry's.
-    std::optional<Eigen::Isometry3d> T_previous_camera_refined;
     // T_map_camera, kept as Ceres parameter blocks so that Optimize() starts from the last
     // solution and writes into place.
     Eigen::Quaterniond q_map_camera;
@@ -155,10 +145,7 @@ class PoseGraph {
   };
 
   std::size_t IndexOf(std::int64_t id) const;  // throws std::invalid_argument
-  // The odometry edge's measurement from keyframe i - 1 to i (one segment): the refined step, or
-  // the odometry's.
-  Eigen::Isometry3d OdometryStep(std::size_t i) const;
-  int PieceOf(int segment) const;  // the root segment
+  int PieceOf(int segment) const;              // the root segment
   // The squared whitened error of a loop at the current map poses.
   double LoopChiSquare(const Loop& loop) const;
   // A gap as an edge, from the latest odometry poses.

@@ -14,7 +14,6 @@
 
 #include "stereo_fabmap_slam/backend/backend_options.h"
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
-#include "stereo_fabmap_slam/backend/map_refinement.h"
 #include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/map/keyframe.h"
@@ -161,10 +160,6 @@ class MappingStage : public MapState {
   // Optimisations of the graph so far, and what the last one did (for the log).
   std::uint64_t optimisations() const { return optimisations_; }
   const backend::PoseGraphSummary& last_optimisation() const { return last_optimisation_; }
-  // Refinements of the map (after optimisations of the whole graph) so far, and the last one.
-  std::uint64_t refinements() const { return refinements_; }
-  const backend::RefinementSummary& last_refinement() const { return last_refinement_; }
-  double last_refinement_ms() const { return last_refinement_ms_; }
   // Why the edges refused since the last call were refused, for the driver to report.
   std::vector<std::string> TakeRefusedEdges();
 
@@ -177,9 +172,6 @@ class MappingStage : public MapState {
   // (keyframes older than the newest that it does not have) are dropped. True if any joined.
   bool AddReadyEdges();
   double Optimise();
-  // Bundle adjustment of the map's keyframes and points with the loop edges (MapRefinement),
-  // adopted by the pose graph.
-  void RefineMap();
   // One input of Take; true if the map changed.
   bool TakeOne(const MappingInput& input, std::size_t index, bool optimise,
                MappingBatchResult* result);
@@ -202,9 +194,6 @@ class MappingStage : public MapState {
   std::uint64_t relocalization_edges_received_ = 0;
   std::uint64_t optimisations_ = 0;
   backend::PoseGraphSummary last_optimisation_;
-  std::uint64_t refinements_ = 0;
-  backend::RefinementSummary last_refinement_;
-  double last_refinement_ms_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::pipeline
