@@ -79,13 +79,18 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
     result.T_camera_world = pose.ToTransform();
 
     result.inliers = 0;
+    bool changed = false;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const PoseObservation& o = observations[i];
       const double chi2 = SquaredReprojectionError(camera, result.T_camera_world, o.world, o.u, o.v,
                                                    o.u_right, options.sigma);
-      result.inlier[i] = chi2 < (o.u_right >= 0 ? kChiSquare95ThreeDof : kChiSquare95TwoDof);
-      result.inliers += result.inlier[i] ? 1 : 0;
+      const bool inlier = chi2 < (o.u_right >= 0 ? kChiSquare95ThreeDof : kChiSquare95TwoDof);
+      changed |= inlier != result.inlier[i];
+      result.inlier[i] = inlier;
+      result.inliers += inlier ? 1 : 0;
     }
+    // The same inliers again: another round would solve the same problem from its optimum.
+    if (!changed) break;
   }
   std::vector<ObservedPoint> inlier_points;
   inlier_points.reserve(static_cast<std::size_t>(result.inliers));

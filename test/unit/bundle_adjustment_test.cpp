@@ -1,5 +1,7 @@
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 
+#include <cmath>
+#include <memory>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -141,6 +143,77 @@ TEST(LocalBundleAdjuster, RemovesGrossOutliers) {
   for (const map::Keyframe& k : problem.keyframes) adjuster.AddKeyframe(k);
   const auto poses = adjuster.KeyframePoses();
   EXPECT_LT((poses.at(3).translation() - problem.true_poses[3].translation()).norm(), 0.01);
+}
+
+// The hand-derived Jacobians of the reprojection error equal Ceres' automatic derivatives of the
+// same functor, for stereo and mono observations, at random poses (quaternions slightly off the
+// unit sphere, as a solver's step leaves them) and points in front of the camera. Both are exact
+// derivatives of one expression: they agree to rounding (1e-9 relative).
+TEST(ReprojectionError, HandDerivedJacobiansEqualAutomaticOnes) {
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::Vector4d q(unit(random), unit(random), unit(random), unit(random));
+    q = q.normalized() * (1.0 + 0.01 * unit(random));
+    double rotation[4] = {q[0], q[1], q[2], q[3]};
+    double translation[3] = {unit(random), unit(random), unit(random)};
+    // A point that lands 1-8 m in front of the camera.
+    const Eigen::Quaterniond unit_q(q[3], q[0], q[1], q[2]);
+    const Eigen::Vector3d in_camera(unit(random), unit(random), 4.5 + 3.5 * unit(random));
+    const Eigen::Vector3d world =
+        unit_q.normalized().conjugate() *
+        (in_camera - Eigen::Vector3d(translation[0], translation[1], translation[2]));
+    double point[3] = {world.x(), world.y(), world.z()};
+    const double u = 300 + 50 * unit(random), v = 200 + 50 * unit(random);
+    const double u_right = trial % 2 == 0 ? u - 20 : -1;  // stereo and mono
+    const int residuals = u_right >= 0 ? 3 : 2;
+
+    std::unique_ptr<ceres::CostFunction> analytic(
+        geometry::ReprojectionError::Create(kCamera, u, v, u_right, 0.7));
+    std::unique_ptr<ceres::CostFunction> automatic(
+        geometry::ReprojectionError::CreateAutoDiff(kCamera, u, v, u_right, 0.7));
+    const double* parameters[3] = {rotation, translation, point};
+    double r_analytic[3], r_automatic[3];
+    double j_analytic[3][12], j_automatic[3][12];
+    double* jacobians_analytic[3] = {j_analytic[0], j_analytic[1], j_analytic[2]};
+    double* jacobians_automatic[3] = {j_automatic[0], j_automatic[1], j_automatic[2]};
+    ASSERT_TRUE(analytic->Evaluate(parameters, r_analytic, jacobians_analytic));
+    ASSERT_TRUE(automatic->Evaluate(parameters, r_automatic, jacobians_automatic));
+    const int sizes[3] = {4, 3, 3};
+    // Three rows always (one row size for Ceres' specialised Schur elimination); a mono
+    // observation's third is 0 with a zero Jacobian row.
+    ASSERT_EQ(analytic->num_residuals(), 3);
+    if (residuals == 2) {
+      EXPECT_EQ(r_analytic[2], 0.0);
+      for (int block = 0; block < 3; ++block) {
+        for (int k = 2 * sizes[block]; k < 3 * sizes[block]; ++k) {
+          EXPECT_EQ(j_analytic[block][k], 0.0);
+        }
+      }
+    }
+    for (int i = 0; i < residuals; ++i) {
+      EXPECT_NEAR(r_analytic[i], r_automatic[i], 1e-9 * (1 + std::abs(r_automatic[i])));
+    }
+    for (int block = 0; block < 3; ++block) {
+      for (int k = 0; k < residuals * sizes[block]; ++k) {
+        EXPECT_NEAR(j_analytic[block][k], j_automatic[block][k],
+                    1e-9 * (1 + std::abs(j_automatic[block][k])))
+            << "trial " << trial << " block " << block << " entry " << k;
+      }
+    }
+    // The fixed-point variant: the same pose Jacobians, no point block.
+    std::unique_ptr<ceres::CostFunction> fixed(
+        geometry::FixedPointReprojectionError::Create(kCamera, world, u, v, u_right, 0.7));
+    double r_fixed[3], j_fixed[2][12];
+    double* jacobians_fixed[2] = {j_fixed[0], j_fixed[1]};
+    ASSERT_TRUE(fixed->Evaluate(parameters, r_fixed, jacobians_fixed));
+    for (int block = 0; block < 2; ++block) {
+      for (int k = 0; k < residuals * sizes[block]; ++k) {
+        EXPECT_NEAR(j_fixed[block][k], j_automatic[block][k],
+                    1e-9 * (1 + std::abs(j_automatic[block][k])));
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -10,8 +10,10 @@ struct BundleAdjustmentOptions {
   int window = 15;          // keyframes optimised together
   int fixed_keyframes = 1;  // the oldest keyframes of the window are held fixed (the gauge)
   int iterations = 10;      // Levenberg-Marquardt iterations a round
-  int rounds = 2;           // optimise, remove outlier observations, optimise again
-  double sigma = 1.0;       // [px] key point position noise
+  // Optimise, remove outlier observations, optimise again: at most this many rounds, and a next
+  // one only if the last removed observations (otherwise it would start at its optimum).
+  int rounds = 2;
+  double sigma = 1.0;  // [px] key point position noise
   int threads = 1;
 
   void Visit(io::OptionVisitor& visitor);

@@ -12,9 +12,15 @@ namespace stereo_fabmap_slam::geometry {
 // T_camera_world as an Eigen quaternion (x, y, z, w), its translation, and the point.
 class ReprojectionError {
  public:
-  // u_right < 0: a mono observation (2 residuals); otherwise stereo (3 residuals).
+  // u_right < 0: a mono observation; otherwise stereo. The cost function evaluates this
+  // functor's expression with Jacobians derived by hand, and has 3 residuals for either (a mono
+  // observation's third is 0, so that Ceres' Schur elimination sees one row size).
   static ceres::CostFunction* Create(const geometry::StereoCamera& camera, double u, double v,
                                      double u_right, double sigma);
+  // Ceres' automatic derivatives of the functor (2 residuals for a mono observation, 3 for a
+  // stereo one): the reference the hand-derived Jacobians are tested against.
+  static ceres::CostFunction* CreateAutoDiff(const geometry::StereoCamera& camera, double u,
+                                             double v, double u_right, double sigma);
 
   ReprojectionError(const geometry::StereoCamera& camera, double u, double v, double u_right,
                     double sigma)
@@ -50,26 +56,13 @@ class ReprojectionError {
 };
 
 // The same error for a point held fixed (motion-only optimisation): the point is part of the
-// functor, so the problem has only the two pose blocks.
+// cost function, so the problem has only the two pose blocks.
 class FixedPointReprojectionError {
  public:
+  // With Jacobians derived by hand, as ReprojectionError::Create.
   static ceres::CostFunction* Create(const geometry::StereoCamera& camera,
                                      const Eigen::Vector3d& point, double u, double v,
                                      double u_right, double sigma);
-
-  FixedPointReprojectionError(const geometry::StereoCamera& camera, const Eigen::Vector3d& point,
-                              double u, double v, double u_right, double sigma)
-      : error_(camera, u, v, u_right, sigma), point_(point) {}
-
-  template <typename T>
-  bool operator()(const T* rotation, const T* translation, T* residuals) const {
-    const T point[3] = {T(point_.x()), T(point_.y()), T(point_.z())};
-    return error_(rotation, translation, point, residuals);
-  }
-
- private:
-  ReprojectionError error_;
-  Eigen::Vector3d point_;
 };
 
 // Squared error in units of sigma^2 of an observation at a pose, and whether it has 3 residuals;
