@@ -80,10 +80,17 @@ void DenseMappingStage::Fuse(const Ready& ready, DenseStepReport* report) {
 DenseStepReport DenseMappingStage::Step() {
   DenseStepReport report;
   report.left_out.swap(left_out_);
+  const std::size_t fused_before = fused_timings_.size();
   while (!ready_.empty()) {
     const Ready ready = std::move(ready_.front());
     ready_.pop_front();
     Fuse(ready, &report);
+  }
+  constexpr std::size_t kEvery = DenseStepReport::Progress::kEvery;
+  if (fused_timings_.size() / kEvery != fused_before / kEvery) {
+    report.progress =
+        DenseStepReport::Progress{volume_.keyframes(), RecentFuseMedianMs(kEvery),
+                                  volume_.fusion().blocks(), volume_.memory_bytes() / 1048576.0};
   }
   if (moves_pending_) {
     const auto most = static_cast<std::size_t>(options_.moves_per_step);

@@ -181,18 +181,13 @@ void DenseMapperNodelet::Report(const dense::DenseStepReport& report) {
                                  "poses ("
                                      << report.still_moving << " still to move)");
   }
-  // Every 20 keyframes fused: their median depth + fusion time and the volume's size.
-  constexpr std::size_t kLogEvery = 20;
-  const std::vector<dense::KeyframeVolume::Timing>& timings = stage_->fused_timings();
-  if (report.fused.empty() ||
-      timings.size() / kLogEvery == (timings.size() - report.fused.size()) / kLogEvery) {
-    return;
+  if (const auto& progress = report.progress) {
+    NODELET_INFO(
+        "%zu keyframes fused (depth + fusion: median %.1f ms over the last %zu), %zu "
+        "blocks, %.0f MB",
+        progress->keyframes, progress->recent_fuse_median_ms,
+        dense::DenseStepReport::Progress::kEvery, progress->blocks, progress->megabytes);
   }
-  const dense::KeyframeVolume& volume = stage_->volume();
-  NODELET_INFO(
-      "%zu keyframes fused (depth + fusion: median %.1f ms over the last %zu), %zu blocks, %.0f MB",
-      volume.keyframes(), stage_->RecentFuseMedianMs(kLogEvery), kLogEvery,
-      volume.fusion().blocks(), volume.memory_bytes() / 1048576.0);
 }
 
 void DenseMapperNodelet::Publish() {

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,16 @@ struct DenseStepReport {
   std::vector<std::string> left_out;
   std::size_t moved = 0;         // keyframes fused again where the map moved them
   std::size_t still_moving = 0;  // keyframes the map moved that wait for a later step
+  // Set by the step whose fusions took the keyframes fused so far across a multiple of
+  // kEvery: what a driver logs now and then about the dense map's cost and size.
+  struct Progress {
+    static constexpr std::size_t kEvery = 20;
+    std::size_t keyframes = 0;         // in the volume
+    double recent_fuse_median_ms = 0;  // depth + fusion, median of the last kEvery new ones
+    std::size_t blocks = 0;
+    double megabytes = 0;  // the volume's memory
+  };
+  std::optional<Progress> progress;
 
   bool changed() const { return !fused.empty() || moved > 0; }
 };
