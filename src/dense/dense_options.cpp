@@ -15,6 +15,7 @@ void StereoDepthOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("speckle_range", &speckle_range);
   visitor.Visit("min_texture", &min_texture);
   visitor.Visit("max_depth", &max_depth);
+  visitor.Visit("refinement_window", &refinement_window);
 }
 
 void StereoDepthOptions::Validate() const {
@@ -36,6 +37,11 @@ void StereoDepthOptions::Validate() const {
     throw std::invalid_argument(section + "min_texture must be a finite number >= 0");
   }
   if (!(max_depth > 0)) throw std::invalid_argument(section + "max_depth must be > 0");
+  if (refinement_window != 0 && (refinement_window < 3 || refinement_window % 2 == 0)) {
+    throw std::invalid_argument(section +
+                                "refinement_window must be 0 (none) or odd and >= 3, got " +
+                                std::to_string(refinement_window));
+  }
 }
 
 void FusionOptions::Visit(io::OptionVisitor& visitor) {

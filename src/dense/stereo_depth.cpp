@@ -4,6 +4,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "stereo_fabmap_slam/dense/disparity_refinement.h"
+
 namespace stereo_fabmap_slam::dense {
 namespace {
 
@@ -56,7 +58,8 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
   // No disparity where the left window is too flat to match, or the matcher found none.
   const cv::Mat flat = LocalDeviation(left, options_.block_size) < options_.min_texture;
   disparity.setTo(0.0f, flat | (disparity <= 0.0f));
-  return disparity;
+  if (options_.refinement_window == 0) return disparity;
+  return DisparityRefinement(options_.refinement_window).Refine(left, right, disparity);
 }
 
 cv::Mat StereoDepth::DepthFromDisparity(const cv::Mat& disparity) const {

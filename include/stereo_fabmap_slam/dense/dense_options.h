@@ -31,6 +31,14 @@ struct StereoDepthOptions {
   // Depth beyond this [m] is dropped: its error grows with the square of the distance (at
   // 6 m a quarter pixel of disparity is 18 cm).
   double max_depth = 6.0;
+  // Window [px] of the sub-pixel refinement of the matcher's disparities (DisparityRefinement),
+  // odd; 0 for none. The refinement's noise falls with the window's area, its fronto-parallel
+  // assumption fails on slanted surfaces as it grows: 15 px spans 10 cm at 3 m. On three routes
+  // of the rendered hall, run_dataset --dense with 0 / 15: mesh median 3.15-4.18 / 2.27-2.99
+  // cm, 90 % 8.57-10.63 / 7.59-9.51 cm, completeness 0.64-0.74 / 0.69-0.77; 21 px (with two
+  // steps) within 0.1 cm of 15. It costs about 6 ms a keyframe whatever the window
+  // (docs/benchmarks.md).
+  int refinement_window = 15;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
@@ -60,10 +68,10 @@ struct FusionOptions {
   // deviation (1 / sqrt of the summed weights) is at most this [m]. What one far view or a
   // mismatch puts in front of or behind a wall is dropped until enough views agree. 8 cm, the
   // truncation band: a surface whose place is known within the band. On a lap of the rendered
-  // hall at exact poses (dense_test) vertices lie at a median 2.2 cm / 90 % 7.4 cm from the
-  // exact surface and cover 59 % of what the lap measured within reach; 3 cm gives 1.2 / 3.4 cm
-  // and 7 %, no limit 4 / 12 cm and 90 %. The errors stay below those of a normal distribution
-  // of this deviation.
+  // hall at exact poses (dense_test, refined disparities) vertices lie at a median 2.0 cm /
+  // 90 % 6.0 cm from the exact surface and cover 63 % of what the lap measured within reach;
+  // 3 cm gives 0.8 / 3.2 cm and 7 %, no limit 3.0 / 12 cm and 95 %. The errors stay below
+  // those of a normal distribution of this deviation.
   double max_surface_sigma = 0.08;
   // Blocks are allocated only around depths whose standard deviation is at most this [m]
   // (5.7 m at EuRoC's rig); farther depths update the blocks nearer ones allocated. Twice the
