@@ -85,6 +85,14 @@ std::string JsonObject::Text() const {
   return text + "}\n";
 }
 
+void RunRecord::AddMappingTimes(std::size_t index, double bundle_adjustment_ms,
+                                double pose_graph_ms, double loop_detection_ms) {
+  FrameTiming& timing = frames_.at(index).timing;
+  timing.bundle_adjustment_ms += bundle_adjustment_ms;
+  timing.pose_graph_ms += pose_graph_ms;
+  timing.loop_detection_ms += loop_detection_ms;
+}
+
 void RunRecord::AddKeyframe(std::int64_t id, double timestamp,
                             const Eigen::Isometry3d& T_odom_camera) {
   // An update can only follow its keyframe; one that reached this record first (the graph's

@@ -1,6 +1,8 @@
 #include "stereo_fabmap_slam/pipeline/stereo_slam.h"
 
+#include <memory>
 #include <stdexcept>
+#include <utility>
 
 #include "stereo_fabmap_slam/map/map_file.h"
 
@@ -35,9 +37,76 @@ void StereoSlam::EnableLoopClosing(place_recognition::LoopDetector detector,
   tracking_.SetRelocalizationOptions(relocalizer_options);
 }
 
+void StereoSlam::EnableConcurrentMapping(std::size_t queued_keyframes) {
+  if (!record_.frames().empty()) {
+    throw std::logic_error("StereoSlam::EnableConcurrentMapping after the first frame");
+  }
+  if (worker_) return;
+  PublishSnapshot();
+  worker_ = std::make_unique<SerialWorker>(queued_keyframes);
+}
+
+void StereoSlam::Synchronize() {
+  if (!worker_) return;
+  worker_->WaitIdle();
+  TakeMappingResults();
+}
+
+std::shared_ptr<const MapState> StereoSlam::LatestMap() const {
+  if (!worker_)
+    return std::shared_ptr<const MapState>(std::shared_ptr<const MapState>(), &mapping_);
+  std::lock_guard<std::mutex> lock(results_mutex_);
+  return snapshot_;
+}
+
+void StereoSlam::PublishSnapshot() {
+  auto snapshot = std::make_shared<const MapSnapshot>(MapSnapshot::Of(mapping_));
+  std::lock_guard<std::mutex> lock(results_mutex_);
+  snapshot_ = std::move(snapshot);
+}
+
 void StereoSlam::SetMode(SlamMode mode) {
+  Synchronize();
   tracking_.SetMode(mode, !mapping_.empty());
   mapping_.SetMode(mode);
+  if (worker_) PublishSnapshot();
+}
+
+MappedKeyframe StereoSlam::MapKeyframe(const map::Keyframe& keyframe) {
+  MappedKeyframe mapped = mapping_.AddKeyframe(keyframe, tracking_.camera());
+  if (place_) place_->stage()->AddKeyframe(keyframe, mapped);
+  return mapped;
+}
+
+void StereoSlam::RunMappingJob(const map::Keyframe& keyframe, std::size_t frame_index) {
+  MappingResult result;
+  result.frame_index = frame_index;
+  result.mapped = MapKeyframe(keyframe);
+  if (place_ && result.mapped.in_map_graph) {
+    result.place = place_->stage()->DetectLoop(result.mapped.keyframe_id);
+    result.loop_pose_graph_ms =
+        mapping_.ApplyLoopDetection(result.place->keyframe_id, result.place->detection.loop);
+  }
+  auto snapshot = std::make_shared<const MapSnapshot>(MapSnapshot::Of(mapping_));
+  std::lock_guard<std::mutex> lock(results_mutex_);
+  finished_.push_back(std::move(result));
+  snapshot_ = std::move(snapshot);
+}
+
+void StereoSlam::TakeMappingResults() {
+  std::vector<MappingResult> finished;
+  {
+    std::lock_guard<std::mutex> lock(results_mutex_);
+    finished.swap(finished_);
+  }
+  for (MappingResult& result : finished) {
+    tracking_.ApplyUpdate(result.mapped.update);
+    record_.ApplyUpdate(result.mapped.update);
+    record_.AddMappingTimes(result.frame_index, result.mapped.bundle_adjustment_ms,
+                            result.mapped.pose_graph_ms + result.loop_pose_graph_ms,
+                            result.place ? result.place->detection_ms : 0.0);
+    if (result.place) record_.AddPlaceResult(std::move(*result.place));
+  }
 }
 
 const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& left_raw,
@@ -45,21 +114,36 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
   arrival_ += 1 + static_cast<std::uint64_t>(std::max(frames_skipped, 0));
   tracking_.input().OnPair(0);
   tracking_.input().CountSkipped(static_cast<std::uint64_t>(std::max(frames_skipped, 0)));
-  TrackingOutput output =
-      tracking_.Process({timestamp, left_raw, right_raw, arrival_}, map_state());
+  TakeMappingResults();  // concurrent mapping: what the worker finished since the last frame
+  const std::shared_ptr<const MapState> map = place_ ? LatestMap() : nullptr;
+  TrackingOutput output = tracking_.Process({timestamp, left_raw, right_raw, arrival_}, map.get());
   last_events_ = output.events;
   if (!output.tracked) return nullptr;
   const odometry::TrackingResult& result = output.tracking;
+
+  if (worker_ && !output.relocalization) {
+    // The keyframe's mapping and loop detection go to the worker; this frame is recorded now.
+    if (result.keyframe) {
+      record_.AddKeyframe(result.keyframe->id, timestamp, result.keyframe->T_world_camera);
+      const std::size_t frame_index = record_.frames().size();
+      worker_->Submit([this, keyframe = *result.keyframe, frame_index] {
+        RunMappingJob(keyframe, frame_index);
+      });
+    }
+    record_.AddFrame(tracking_.RecordFrame(output, timestamp, nullptr));
+    return &record_.frames().back();
+  }
+  // In order from here: a relocalization needs the map as every keyframe before it left it.
+  Synchronize();
 
   // The keyframe's bundle adjustment, whose update the tracker follows before the next frame,
   // and (mapping mode) the pose graph; the place stage makes it a place.
   std::optional<MappedKeyframe> mapped;
   if (result.keyframe) {
     record_.AddKeyframe(result.keyframe->id, timestamp, result.keyframe->T_world_camera);
-    mapped = mapping_.AddKeyframe(*result.keyframe, tracking_.camera());
+    mapped = MapKeyframe(*result.keyframe);
     tracking_.ApplyUpdate(mapped->update);
     record_.ApplyUpdate(mapped->update);
-    if (place_) place_->stage()->AddKeyframe(*result.keyframe, *mapped);
   }
   // Before loop detection: after a loss, finding the frame in the map is relocalization's job,
   // and the loop detection of the same keyframe then adds a loop within one map.
@@ -89,6 +173,7 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
     record_.AddPlaceResult(std::move(place));
   }
   record_.AddFrame(std::move(record));
+  if (worker_) PublishSnapshot();
   return &record_.frames().back();
 }
 
@@ -99,6 +184,7 @@ MapFileAnswer StereoSlam::SaveMap(const std::string& path) const {
 
 MapFileAnswer StereoSlam::LoadMap(const std::string& path) {
   if (!place_) throw std::logic_error("StereoSlam::LoadMap: loop closing is off");
+  Synchronize();
   std::optional<LoadedMapFile> file;
   const MapFileAnswer answer = place_->LoadMap(path, &file);  // checks it all first
   if (!file) return answer;
@@ -107,6 +193,7 @@ MapFileAnswer StereoSlam::LoadMap(const std::string& path) {
   for (const map::SavedKeyframe& keyframe : file->saved.keyframes) {
     record_.AddKeyframeTime(keyframe.keyframe.id, keyframe.keyframe.timestamp);
   }
+  if (worker_) PublishSnapshot();
   return answer;
 }
 

@@ -75,10 +75,12 @@ class DenseStageRun : public DenseRun {
 
  private:
   void SetMap(const pipeline::StereoSlam& slam) {
+    // The map as the last mapped keyframe left it (with --threads the worker may be mapping one).
+    const std::shared_ptr<const pipeline::MapState> map = slam.LatestMap();
     std::map<std::uint64_t, Eigen::Isometry3d> poses;
-    for (const auto& [id, pose] : slam.mapping().MapPoses())
+    for (const auto& [id, pose] : map->MapPoses())
       poses.emplace(static_cast<std::uint64_t>(id), pose);
-    stage_.SetMap(slam.mapping().MapToOdom(), std::move(poses));
+    stage_.SetMap(map->MapToOdom(), std::move(poses));
   }
 
   void Step() {

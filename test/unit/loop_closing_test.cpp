@@ -37,12 +37,13 @@ Eigen::Vector3d PositionAt(const io::Trajectory& truth, double time) {
 // summary.json (empty, and the test fails, if a program failed).
 std::pair<std::string, std::string> MapRenderedRoute(const TemporaryDirectory& temp,
                                                      const std::string& route, int seconds,
-                                                     int seed, const std::string& scene = "hall") {
+                                                     int seed, const std::string& scene = "hall",
+                                                     const std::string& options = "") {
   const std::string sequence = SharedSyntheticSequence(MAKE_SYNTHETIC_SEQUENCE_BIN, route, seconds,
                                                        seed, scene, scene == "hall");
   std::string output;
-  if (sequence.empty() || RunCommand(std::string(RUN_DATASET_BIN) + " " + sequence +
-                                         " --quiet --output " + temp.path() + "/run 2>&1",
+  if (sequence.empty() || RunCommand(std::string(RUN_DATASET_BIN) + " " + sequence + " --quiet " +
+                                         options + " --output " + temp.path() + "/run 2>&1",
                                      &output) != 0) {
     ADD_FAILURE() << output;
     return {sequence, ""};
@@ -149,6 +150,31 @@ TEST(Relocalization, KidnappedCameraIsFoundAgainAndTheTrajectoryStaysOnePiece) {
   // two unrelated pieces, is metres off.
   EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.03);
   EXPECT_GT(JsonNumber(summary, "ate_rmse_odometry"), 1.0);
+}
+
+// run_dataset --threads: the keyframes mapped on a second thread while tracking goes on, as in
+// the nodelet graph; the frame that asks for a relocalization after the jump waits for the
+// keyframes before it. The same route and bounds as the test above, and every keyframe must
+// have reached the map and every accepted loop be true. (Measured: 1.48 cm, the same 52 loops
+// as in one thread; 4.8x real time against 3.6x.)
+TEST(Relocalization, KidnappedCameraIsFoundAgainWithTheMappingOnItsOwnThread) {
+  TemporaryDirectory temp;
+  const auto [sequence, summary] = MapRenderedRoute(temp, "kidnap", 40, 2, "hall", "--threads");
+  ASSERT_FALSE(summary.empty());
+  RecordProperty("summary", summary);
+  EXPECT_GE(JsonNumber(summary, "relocalization_attempts"), 1);
+  EXPECT_LE(JsonNumber(summary, "frames_lost"), 20);
+  EXPECT_EQ(JsonNumber(summary, "map_keyframes"), JsonNumber(summary, "keyframes"));
+  EXPECT_EQ(JsonNumber(summary, "trajectory_frames"), JsonNumber(summary, "frames"));
+  EXPECT_EQ(JsonNumber(summary, "ate_matched"), JsonNumber(summary, "frames"));
+  EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.03);
+  EXPECT_GE(JsonNumber(summary, "loops_accepted"), 1);
+  for (const AcceptedLoop& loop : AcceptedLoops(sequence, temp.path() + "/run")) {
+    EXPECT_LT(loop.distance, 1.0) << "loop " << loop.query_keyframe << " -> "
+                                  << loop.match_keyframe;
+  }
+  // The keyframes' bundle adjustment times reached their frames' lines of timing.csv.
+  EXPECT_GT(JsonNumber(summary, "bundle_adjustment_ms_mean"), 0.0);
 }
 
 }  // namespace

@@ -49,6 +49,15 @@ struct MapSnapshot : MapState {
   std::vector<backend::PoseGraphEdge> loop_edges;
   Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
 
+  // The answers `map` gives now.
+  static MapSnapshot Of(const MapState& map) {
+    MapSnapshot snapshot;
+    for (const auto& [id, pose] : map.MapPoses()) snapshot.keyframes[id] = {pose, map.InMap(id)};
+    snapshot.loop_edges = map.LoopEdges();
+    snapshot.T_map_odom = map.MapToOdom();
+    return snapshot;
+  }
+
   bool empty() const override { return keyframes.empty(); }
   bool Contains(std::int64_t id) const override { return keyframes.count(id) > 0; }
   bool InMap(std::int64_t id) const override {

@@ -55,6 +55,11 @@ class RunRecord {
   // A keyframe of a loaded map (its time, for keyframes.txt and loops.csv).
   void AddKeyframeTime(std::int64_t id, double timestamp) { keyframe_times_[id] = timestamp; }
   void AddPlaceResult(PlaceResult result) { place_results_.push_back(std::move(result)); }
+  // The mapping and place stages' times of frame `index` (its keyframe's bundle adjustment, pose
+  // graph, loop detection), added when they ran after the frame was recorded (concurrent
+  // mapping). Throws std::out_of_range for a frame not recorded.
+  void AddMappingTimes(std::size_t index, double bundle_adjustment_ms, double pose_graph_ms,
+                       double loop_detection_ms);
 
   const std::vector<FrameRecord>& frames() const { return frames_; }
   const std::vector<PlaceResult>& place_results() const { return place_results_; }

@@ -2,6 +2,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,6 +15,7 @@
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 #include "stereo_fabmap_slam/pipeline/place_service.h"
 #include "stereo_fabmap_slam/pipeline/run_record.h"
+#include "stereo_fabmap_slam/pipeline/serial_worker.h"
 #include "stereo_fabmap_slam/pipeline/slam_mode.h"
 #include "stereo_fabmap_slam/pipeline/stereo_front_end.h"
 #include "stereo_fabmap_slam/pipeline/tracking_stage.h"
@@ -30,12 +33,17 @@ struct RelocalizationOutput {
   double extraction_ms = 0;  // rectification and stereo features of the pair
 };
 
-// The whole SLAM in one thread, frame by frame, through the three stages the nodelets run
-// apart (docs/architecture.md): the tracking stage; on a keyframe the mapping stage (bundle
+// The whole SLAM frame by frame, through the three stages the nodelets run apart
+// (docs/architecture.md): the tracking stage; on a keyframe the mapping stage (bundle
 // adjustment, whose update goes straight back to the tracker, and the pose graph) and, with loop
 // closing, the place stage, which makes the keyframe a place; a relocalization the tracking
-// stage asks for; then the keyframe's loop detection, whose loop the mapping stage closes. The
-// same input gives the same output. The clock (milliseconds) is only read to fill the timings.
+// stage asks for; then the keyframe's loop detection, whose loop the mapping stage closes. By
+// default in one thread, in that order: the same input gives the same output. With concurrent
+// mapping (EnableConcurrentMapping) a keyframe's mapping and loop detection run on a second
+// thread while tracking goes on, as in the nodelet graph: the tracker follows the bundle
+// adjustment's update and sees the map (a MapSnapshot) when they are done, not before its next
+// frame, so the output depends on timing. The clock (milliseconds) is only read to fill the
+// timings.
 class StereoSlam {
  public:
   using Clock = StereoFrontEnd::Clock;
@@ -51,6 +59,21 @@ class StereoSlam {
   void EnableLoopClosing(place_recognition::LoopDetector detector,
                          const backend::PoseGraphOptions& pose_graph_options,
                          const relocalization::RelocalizerOptions& relocalizer_options = {});
+  // Runs the mapping and place stages' keyframe work on a thread of its own from now on (before
+  // the first frame). At most `queued_keyframes` keyframes wait for it; a tracker further ahead
+  // waits. A frame that asks for a relocalization waits until the keyframes before it are
+  // mapped, and is processed in order. Until Synchronize(), the accessors of the map, the
+  // record and the stages below (and SaveMap, Relocalize) see it as the last finished keyframe
+  // left it, or are not safe to call while a keyframe is being mapped: call Synchronize() first.
+  void EnableConcurrentMapping(std::size_t queued_keyframes = 4);
+  bool concurrent_mapping() const { return worker_ != nullptr; }
+  // Waits until every keyframe so far is mapped and passes their results on (the tracker, the
+  // record). Nothing to do without concurrent mapping.
+  void Synchronize();
+  // The map as the last finished keyframe left it (a snapshot with concurrent mapping; the
+  // mapping stage itself otherwise): safe to read between frames in either case.
+  std::shared_ptr<const MapState> LatestMap() const;
+
   void SetMode(SlamMode mode);
   SlamMode mode() const { return mapping_.mode(); }
   // The map (keyframes, words, pose graph) to a file, and back, with the answers the ROS
@@ -89,6 +112,22 @@ class StereoSlam {
   double max_match_distance() const { return tracking_.front_end().max_match_distance(); }
 
  private:
+  // What the mapping and place stages made of one keyframe (concurrent mapping).
+  struct MappingResult {
+    std::size_t frame_index = 0;  // in record_
+    MappedKeyframe mapped;
+    std::optional<PlaceResult> place;
+    double loop_pose_graph_ms = 0;  // closing the loop place found
+  };
+  // The mapping stage's and (with loop closing) the place stage's keyframe work before loop
+  // detection.
+  MappedKeyframe MapKeyframe(const map::Keyframe& keyframe);
+  // A keyframe's whole mapping on the worker thread.
+  void RunMappingJob(const map::Keyframe& keyframe, std::size_t frame_index);
+  // On the caller's thread: the finished keyframes' results to the tracker and the record.
+  void TakeMappingResults();
+  void PublishSnapshot();  // the worker idle or running the caller
+
   Clock clock_;
   TrackingStage tracking_;
   MappingStage mapping_;
@@ -97,6 +136,12 @@ class StereoSlam {
   RunRecord record_;
   std::uint64_t arrival_ = 0;  // pairs seen, skipped ones included
   std::vector<InputEvent> last_events_;
+  // Concurrent mapping: the results the worker finished and the map it left, under the mutex.
+  mutable std::mutex results_mutex_;
+  std::vector<MappingResult> finished_;
+  std::shared_ptr<const MapSnapshot> snapshot_;
+  // Last: destroyed first, so that its thread ends before the stages it uses.
+  std::unique_ptr<SerialWorker> worker_;
 };
 
 }  // namespace stereo_fabmap_slam::pipeline
