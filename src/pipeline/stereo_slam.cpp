@@ -126,7 +126,12 @@ const FrameRecord* StereoSlam::ProcessFrame(double timestamp, const cv::Mat& lef
     if (result.keyframe) {
       record_.AddKeyframe(result.keyframe->id, timestamp, result.keyframe->T_world_camera);
       const std::size_t frame_index = record_.frames().size();
-      worker_->Submit([this, keyframe = *result.keyframe, frame_index] {
+      // The worker's own copy: cv::Mat copies share their pixels, which the front end's buffers
+      // may be reused for while the worker reads them.
+      map::Keyframe keyframe = *result.keyframe;
+      keyframe.features.descriptors = keyframe.features.descriptors.clone();
+      keyframe.place_descriptors = keyframe.place_descriptors.clone();
+      worker_->Submit([this, keyframe = std::move(keyframe), frame_index] {
         RunMappingJob(keyframe, frame_index);
       });
     }
