@@ -66,7 +66,6 @@ class StereoSlam {
   // record and the stages below (and SaveMap, Relocalize) see it as the last finished keyframe
   // left it, or are not safe to call while a keyframe is being mapped: call Synchronize() first.
   void EnableConcurrentMapping(std::size_t queued_keyframes = 4);
-  bool concurrent_mapping() const { return worker_ != nullptr; }
   // Waits until every keyframe so far is mapped and passes their results on (the tracker, the
   // record). Nothing to do without concurrent mapping.
   void Synchronize();
