@@ -132,17 +132,16 @@ TEST(LoopClosing, OfficeLoopIsClosedWithoutLoopsBetweenLookAlikeCorridors) {
 }
 
 // What the kidnap route's run must show: the camera found again at once after the jump and the
-// trajectory one piece.
-void ExpectFoundAgainInOnePiece(const std::string& summary) {
+// trajectory one piece, within `max_ate` [m] of the truth.
+void ExpectFoundAgainInOnePiece(const std::string& summary, double max_ate) {
   EXPECT_GE(JsonNumber(summary, "relocalization_attempts"), 1);
   // Found again within 1 s of the jump (20 frames): fewer frames than that off the map.
   EXPECT_LE(JsonNumber(summary, "frames_lost"), 20);
   // One piece: every frame in the map trajectory, evaluated with one alignment.
   EXPECT_EQ(JsonNumber(summary, "trajectory_frames"), JsonNumber(summary, "frames"));
   EXPECT_EQ(JsonNumber(summary, "ate_matched"), JsonNumber(summary, "frames"));
-  // The target, 3 cm (measured 2.3 cm on these 40 s, 1.5 cm on 50 s); the odometry alone,
-  // two unrelated pieces, is metres off.
-  EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.03);
+  // The odometry alone, two unrelated pieces, is metres off.
+  EXPECT_LT(JsonNumber(summary, "ate_rmse"), max_ate);
   EXPECT_GT(JsonNumber(summary, "ate_rmse_odometry"), 1.0);
 }
 
@@ -155,7 +154,8 @@ TEST(Relocalization, KidnappedCameraIsFoundAgainAndTheTrajectoryStaysOnePiece) {
   const std::string summary = MapRenderedRoute(temp, "kidnap", 40, 2).second;
   ASSERT_FALSE(summary.empty());
   RecordProperty("summary", summary);
-  ExpectFoundAgainInOnePiece(summary);
+  // The target, 3 cm (measured 2.3 cm on these 40 s, 1.5 cm on 50 s).
+  ExpectFoundAgainInOnePiece(summary, 0.03);
 }
 
 // run_dataset --threads: the keyframes mapped on a second thread while tracking goes on, as in
@@ -171,11 +171,7 @@ TEST(Relocalization, KidnappedCameraIsFoundAgainWithTheMappingOnItsOwnThread) {
   const auto [sequence, summary] = MapRenderedRoute(temp, "kidnap", 40, 2, "hall", "--threads");
   ASSERT_FALSE(summary.empty());
   RecordProperty("summary", summary);
-  EXPECT_GE(JsonNumber(summary, "relocalization_attempts"), 1);
-  EXPECT_LE(JsonNumber(summary, "frames_lost"), 20);
-  EXPECT_EQ(JsonNumber(summary, "trajectory_frames"), JsonNumber(summary, "frames"));
-  EXPECT_EQ(JsonNumber(summary, "ate_matched"), JsonNumber(summary, "frames"));
-  EXPECT_LT(JsonNumber(summary, "ate_rmse"), 0.05);
+  ExpectFoundAgainInOnePiece(summary, 0.05);
   EXPECT_EQ(JsonNumber(summary, "map_keyframes"), JsonNumber(summary, "keyframes"));
   EXPECT_GE(JsonNumber(summary, "loops_accepted"), 1);
   for (const AcceptedLoop& loop : AcceptedLoops(sequence, temp.path() + "/run")) {
