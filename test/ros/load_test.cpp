@@ -14,10 +14,12 @@
 #include <cstdint>
 #include <cstdlib>
 #include <functional>
+#include <iomanip>
 #include <map>
 #include <mutex>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -211,17 +213,33 @@ double AteBetween(const evaluation::Trajectory& reference, const evaluation::Tra
   return evaluation::EvaluateTrajectory(reference, estimate, options).ate.rmse;
 }
 
-// The worst ATE of the run's pieces of odometry against `reference`, each aligned on its own: a
-// tracking loss starts a new piece where the motion model guessed, and the Backend, not the
-// odometry, joins the pieces again (relocalization). Pieces of fewer than 10 poses are left out:
-// an alignment fitted to so few fits anything.
-double WorstPieceAte(const evaluation::Trajectory& reference, const GraphRun& run) {
+// The run's pieces of odometry against `reference`, each aligned on its own: a tracking loss
+// starts a new piece where the motion model guessed, and the Backend, not the odometry, joins the
+// pieces again (relocalization). Pieces of fewer than 10 poses are left out of `worst`: an
+// alignment fitted to so few fits anything. `pieces` names every piece (first stamp, poses, ATE)
+// for the failure message: a piece off by centimetres is told apart from one tracked against the
+// wrong place only by where it starts and how long it is.
+struct PieceAtes {
+  double worst = 0;
+  std::string pieces;
+};
+
+PieceAtes ComparePieces(const evaluation::Trajectory& reference, const GraphRun& run) {
   std::vector<double> starts = run.new_map_stamps;
   std::sort(starts.begin(), starts.end());
-  double worst = 0;
+  PieceAtes result;
   evaluation::Trajectory piece;
   const auto close_piece = [&]() {
-    if (piece.size() >= 10) worst = std::max(worst, AteBetween(reference, piece));
+    if (piece.empty()) return;
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(3) << "piece from " << piece.front().timestamp << " s, "
+         << piece.size() << " poses";
+    if (piece.size() >= 10) {
+      const double ate = AteBetween(reference, piece);
+      result.worst = std::max(result.worst, ate);
+      line << ", ATE " << ate * 1000 << " mm";
+    }
+    result.pieces += line.str() + "\n";
     piece.clear();
   };
   std::size_t next_start = 0;
@@ -233,7 +251,17 @@ double WorstPieceAte(const evaluation::Trajectory& reference, const GraphRun& ru
     piece.push_back(pose);
   }
   close_piece();
-  return worst;
+  return result;
+}
+
+// The tracker's warnings in a launch log (skips, gaps, losses), for failure messages.
+std::string TrackerWarnings(const std::string& log) {
+  std::istringstream lines(log);
+  std::string line, warnings;
+  while (std::getline(lines, line)) {
+    if (line.find("WARN") != std::string::npos) warnings += line + "\n";
+  }
+  return warnings;
 }
 
 TEST(Load, FastPlaybackAndSeparateProcesses) {
@@ -285,7 +313,7 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   // two lost the track once (one inside a full make test beside the sanitizer build: a skipped
   // stretch, then no RANSAC consensus; the front end's speed is issue 35's). Each loss starts a new
   // piece of odometry, and the keyframe that starts it says so: one is allowed, more would be a
-  // tracker that cannot hold 5x; each piece must still be accurate (WorstPieceAte below). Frames
+  // tracker that cannot hold 5x; each piece must still be accurate (ComparePieces below). Frames
   // lost with the map kept (the next frame finds the map, odom goes on unbroken) are counted, not
   // asserted.
   //
@@ -328,16 +356,17 @@ TEST(Load, FastPlaybackAndSeparateProcesses) {
   // a 10 s bag, so one fewer is allowed; more would be a sparser map.
   EXPECT_GE(fast.keyframes + 1, real_time.keyframes);
   RecordProperty("pieces_fast", static_cast<int>(fast.new_map_stamps.size() + 1));
-  const double fast_ate = WorstPieceAte(real_time.odometry, fast);
+  const PieceAtes fast_pieces = ComparePieces(real_time.odometry, fast);
+  const double fast_ate = fast_pieces.worst;
   RecordProperty("ate_fast_against_1x_m", std::to_string(fast_ate));
   // Which pairs are skipped depends on the machine's load, and so does the trajectory: six runs
   // at 5x on the faster machine gave 2.0 to 13.9 mm against the 1x run over 0.39 m, 3x on the
   // slower one 13.0 and 16.1 mm, 1.8 to 5.3 mm in four runs with the descriptor search (one of
   // them in three pieces), 2.8 to 6.5 mm in three with the map kept (one piece each), 1.7 to 7.2
   // mm in six at 5x with the look-ahead keyframes. Each piece is aligned on its own
-  // (WorstPieceAte): a loss is counted above, not twice. 2.5 cm is above that spread and still
+  // (ComparePieces): a loss is counted above, not twice. 2.5 cm is above that spread and still
   // far below a piece that drifted or was tracked against the wrong place (tens of centimetres).
-  EXPECT_LT(fast_ate, 0.025);
+  EXPECT_LT(fast_ate, 0.025) << fast_pieces.pieces << TrackerWarnings(fast.log);
 
   const GraphRun split = PlayBag(bag, "rate:=1 standalone:=true", temp.path() + "/standalone.log");
   RecordProperty("odometry_standalone", static_cast<int>(split.odometry.size()));
@@ -408,11 +437,15 @@ TEST(Load, TwoAndTenTimesRealTime) {
     // and far from a tracker that loses most of its ~30 frames. Each piece of odometry between
     // losses must still be right: 1.7-10.0 mm against the 2x run in five runs (5x: 1.7-13.9 mm,
     // above), so the 5x bound of 2.5 cm holds it, far below a piece that drifted or was tracked
-    // against the wrong place (tens of centimetres).
+    // against the wrong place (tens of centimetres). With busy loops beside the test to stand in
+    // for a slower machine: 0.9-4.4 mm in eleven runs with one, 1.0-7.1 mm in five with two. One
+    // CI run failed this bound without its figures: the message now names every piece and the
+    // tracker's warnings, so that the next one tells a slow machine from a wrong piece.
     EXPECT_LE(run.new_map_stamps.size(), 4u) << run.log;
-    const double worst_piece_ate = WorstPieceAte(two_x.odometry, run);
-    RecordProperty("worst_piece_ate_10x_against_2x_m", std::to_string(worst_piece_ate));
-    EXPECT_LT(worst_piece_ate, 0.025);
+    const PieceAtes pieces = ComparePieces(two_x.odometry, run);
+    RecordProperty("worst_piece_ate_10x_against_2x_m", std::to_string(pieces.worst));
+    RecordProperty("pieces_10x", pieces.pieces);
+    EXPECT_LT(pieces.worst, 0.025) << pieces.pieces << TrackerWarnings(run.log);
   }
 }
 
