@@ -72,17 +72,26 @@ map::KeyframeUpdate LocalBundleAdjuster::Optimise() {
   ceres::HuberLoss loss(std::sqrt(geometry::kChiSquare95ThreeDof));
   std::set<std::pair<std::int64_t, std::int64_t>> rejected;  // (point, keyframe)
   for (int round = 0; round < options_.rounds; ++round) {
+    std::size_t residuals = 0;
+    for (const std::int64_t p : point_ids) residuals += points_[p].observations.size();
+    if (residuals > costs_capacity_) {
+      costs_capacity_ = residuals + residuals / 2;
+      costs_ = std::make_unique<geometry::ReprojectionCost[]>(costs_capacity_);
+    }
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
+    std::size_t next_cost = 0;
     for (const std::int64_t p : point_ids) {
       Point& point = points_[p];
       for (const Observation& o : point.observations) {
         if (rejected.count({p, o.keyframe})) continue;
         geometry::PoseParameters& pose = poses[o.keyframe];
-        problem.AddResidualBlock(
-            geometry::ReprojectionError::Create(camera_, o.u, o.v, o.u_right, options_.sigma),
-            &loss, pose.rotation, pose.translation, point.position.data());
+        geometry::ReprojectionCost& cost = costs_[next_cost++];
+        cost.Set(camera_, o.u, o.v, o.u_right, options_.sigma);
+        problem.AddResidualBlock(&cost, &loss, pose.rotation, pose.translation,
+                                 point.position.data());
       }
     }
     for (auto& [id, pose] : poses) {

@@ -1,6 +1,7 @@
 #include "stereo_fabmap_slam/geometry/pose_refiner.h"
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include <ceres/ceres.h>
@@ -52,19 +53,21 @@ PoseRefinement RefinePose(const std::vector<PoseObservation>& observations,
   result.inlier =
       initial_inliers != nullptr ? *initial_inliers : std::vector<bool>(observations.size(), true);
   ceres::HuberLoss loss(std::sqrt(kChiSquare95ThreeDof));
+  // One array of costs for every round's problem, not one allocation per residual.
+  const auto costs = std::make_unique<FixedPointReprojectionCost[]>(observations.size());
   for (int round = 0; round < options.rounds; ++round) {
     PoseParameters pose = PoseParameters::FromTransform(result.T_camera_world);
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
     int residual_blocks = 0;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (!result.inlier[i]) continue;
       const PoseObservation& o = observations[i];
-      problem.AddResidualBlock(
-          FixedPointReprojectionError::Create(camera, o.world, o.u, o.v, o.u_right, options.sigma),
-          &loss, pose.rotation, pose.translation);
-      ++residual_blocks;
+      FixedPointReprojectionCost& cost = costs[static_cast<std::size_t>(residual_blocks++)];
+      cost.Set(camera, o.world, o.u, o.v, o.u_right, options.sigma);
+      problem.AddResidualBlock(&cost, &loss, pose.rotation, pose.translation);
     }
     if (residual_blocks < 3) break;
     problem.SetManifold(pose.rotation, new ceres::EigenQuaternionManifold);

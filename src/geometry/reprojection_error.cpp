@@ -14,15 +14,19 @@ namespace {
 // quaternion a step has taken slightly off the unit sphere.
 struct StereoProjection {
   StereoProjection(const StereoCamera& camera, double u, double v, double u_right, double sigma)
-      : fx(camera.fx),
-        fy(camera.fy),
-        cx(camera.cx),
-        cy(camera.cy),
-        fx_baseline(camera.fx * camera.baseline),
+      : StereoProjection(camera.fx, camera.fy, camera.cx, camera.cy, camera.fx * camera.baseline, u,
+                         v, u_right, 1.0 / sigma) {}
+  StereoProjection(double fx, double fy, double cx, double cy, double fx_baseline, double u,
+                   double v, double u_right, double inverse_sigma)
+      : fx(fx),
+        fy(fy),
+        cx(cx),
+        cy(cy),
+        fx_baseline(fx_baseline),
         u(u),
         v(v),
         u_right(u_right),
-        inverse_sigma(1.0 / sigma) {}
+        inverse_sigma(inverse_sigma) {}
 
   // Three residuals always, the third 0 with a zero Jacobian row for a mono observation: with
   // one row size for every observation Ceres' Schur elimination runs its code specialised for
@@ -91,56 +95,46 @@ struct StereoProjection {
   double u, v, u_right, inverse_sigma;
 };
 
-class AnalyticReprojectionError : public ceres::SizedCostFunction<3, 4, 3, 3> {
- public:
-  explicit AnalyticReprojectionError(const StereoProjection& projection)
-      : projection_(projection) {}
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    projection_.Evaluate(parameters[0], parameters[1], parameters[2], residuals,
-                         jacobians != nullptr ? jacobians[0] : nullptr,
-                         jacobians != nullptr ? jacobians[1] : nullptr,
-                         jacobians != nullptr ? jacobians[2] : nullptr);
-    return true;
-  }
-
- private:
-  StereoProjection projection_;
-};
-
-class AnalyticFixedPointReprojectionError : public ceres::SizedCostFunction<3, 4, 3> {
- public:
-  AnalyticFixedPointReprojectionError(const StereoProjection& projection,
-                                      const Eigen::Vector3d& point)
-      : projection_(projection), point_(point) {}
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    projection_.Evaluate(parameters[0], parameters[1], point_.data(), residuals,
-                         jacobians != nullptr ? jacobians[0] : nullptr,
-                         jacobians != nullptr ? jacobians[1] : nullptr, nullptr);
-    return true;
-  }
-
- private:
-  StereoProjection projection_;
-  Eigen::Vector3d point_;
-};
-
 }  // namespace
 
-ceres::CostFunction* ReprojectionError::Create(const geometry::StereoCamera& camera, double u,
-                                               double v, double u_right, double sigma) {
-  const StereoProjection projection(camera, u, v, u_right, sigma);
-  return new AnalyticReprojectionError(projection);
+void ReprojectionCost::Set(const geometry::StereoCamera& camera, double u, double v, double u_right,
+                           double sigma) {
+  fx_ = camera.fx;
+  fy_ = camera.fy;
+  cx_ = camera.cx;
+  cy_ = camera.cy;
+  fx_baseline_ = camera.fx * camera.baseline;
+  u_ = u;
+  v_ = v;
+  u_right_ = u_right;
+  inverse_sigma_ = 1.0 / sigma;
 }
 
-ceres::CostFunction* FixedPointReprojectionError::Create(const geometry::StereoCamera& camera,
-                                                         const Eigen::Vector3d& point, double u,
-                                                         double v, double u_right, double sigma) {
-  const StereoProjection projection(camera, u, v, u_right, sigma);
-  return new AnalyticFixedPointReprojectionError(projection, point);
+bool ReprojectionCost::Evaluate(double const* const* parameters, double* residuals,
+                                double** jacobians) const {
+  const StereoProjection projection(fx_, fy_, cx_, cy_, fx_baseline_, u_, v_, u_right_,
+                                    inverse_sigma_);
+  projection.Evaluate(parameters[0], parameters[1], parameters[2], residuals,
+                      jacobians != nullptr ? jacobians[0] : nullptr,
+                      jacobians != nullptr ? jacobians[1] : nullptr,
+                      jacobians != nullptr ? jacobians[2] : nullptr);
+  return true;
+}
+
+void FixedPointReprojectionCost::Set(const geometry::StereoCamera& camera,
+                                     const Eigen::Vector3d& point, double u, double v,
+                                     double u_right, double sigma) {
+  projection_.Set(camera, u, v, u_right, sigma);
+  point_ = point;
+}
+
+bool FixedPointReprojectionCost::Evaluate(double const* const* parameters, double* residuals,
+                                          double** jacobians) const {
+  const double* all_parameters[3] = {parameters[0], parameters[1], point_.data()};
+  double* all_jacobians[3] = {jacobians != nullptr ? jacobians[0] : nullptr,
+                              jacobians != nullptr ? jacobians[1] : nullptr, nullptr};
+  return projection_.Evaluate(all_parameters, residuals,
+                              jacobians != nullptr ? all_jacobians : nullptr);
 }
 
 ceres::CostFunction* ReprojectionError::CreateAutoDiff(const geometry::StereoCamera& camera,

@@ -3,12 +3,14 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/geometry/reprojection_error.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 #include "stereo_fabmap_slam/map/keyframe.h"
@@ -60,6 +62,10 @@ class LocalBundleAdjuster {
   std::map<std::int64_t, Keyframe> keyframes_;
   std::unordered_map<std::int64_t, Point> points_;
   std::deque<std::int64_t> window_;
+  // The residuals' costs, reused by every problem (each lives for one solve): no allocation per
+  // residual, and the costs lie in memory in the order Ceres evaluates them.
+  std::unique_ptr<geometry::ReprojectionCost[]> costs_;
+  std::size_t costs_capacity_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::backend

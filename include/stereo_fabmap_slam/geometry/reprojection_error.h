@@ -12,13 +12,10 @@ namespace stereo_fabmap_slam::geometry {
 // T_camera_world as an Eigen quaternion (x, y, z, w), its translation, and the point.
 class ReprojectionError {
  public:
-  // u_right < 0: a mono observation; otherwise stereo. The cost function evaluates this
-  // functor's expression with Jacobians derived by hand, and has 3 residuals for either (a mono
-  // observation's third is 0, so that Ceres' Schur elimination sees one row size).
-  static ceres::CostFunction* Create(const geometry::StereoCamera& camera, double u, double v,
-                                     double u_right, double sigma);
-  // Ceres' automatic derivatives of the functor (2 residuals for a mono observation, 3 for a
-  // stereo one): the reference the hand-derived Jacobians are tested against.
+  // u_right < 0: a mono observation; otherwise stereo. What Ceres solves with is ReprojectionCost
+  // below, this functor's expression with Jacobians derived by hand. This makes Ceres' automatic
+  // derivatives of the functor (2 residuals for a mono observation, 3 for a stereo one): the
+  // reference the hand-derived Jacobians are tested against.
   static ceres::CostFunction* CreateAutoDiff(const geometry::StereoCamera& camera, double u,
                                              double v, double u_right, double sigma);
 
@@ -55,14 +52,35 @@ class ReprojectionError {
   double u_, v_, u_right_, inverse_sigma_;
 };
 
-// The same error for a point held fixed (motion-only optimisation): the point is part of the
-// cost function, so the problem has only the two pose blocks.
-class FixedPointReprojectionError {
+// ReprojectionError's expression with Jacobians derived by hand, and 3 residuals for either kind
+// of observation (a mono observation's third is 0, so that Ceres' Schur elimination sees one row
+// size). The observation can be set again: a bundle adjustment keeps one array of them from
+// solve to solve instead of allocating one per residual and solve (two allocations each, ~8,000
+// a keyframe).
+class ReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3, 3> {
  public:
-  // With Jacobians derived by hand, as ReprojectionError::Create.
-  static ceres::CostFunction* Create(const geometry::StereoCamera& camera,
-                                     const Eigen::Vector3d& point, double u, double v,
-                                     double u_right, double sigma);
+  void Set(const geometry::StereoCamera& camera, double u, double v, double u_right, double sigma);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0, fx_baseline_ = 0;
+  double u_ = 0, v_ = 0, u_right_ = -1, inverse_sigma_ = 1;
+};
+
+// The same error for a point held fixed (motion-only optimisation): the point is part of the
+// cost function, so the problem has only the two pose blocks. Settable again, as ReprojectionCost:
+// a pose refinement allocates one array of them, not one cost per observation.
+class FixedPointReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3> {
+ public:
+  void Set(const geometry::StereoCamera& camera, const Eigen::Vector3d& point, double u, double v,
+           double u_right, double sigma);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  ReprojectionCost projection_;
+  Eigen::Vector3d point_ = Eigen::Vector3d::Zero();
 };
 
 // Squared error in units of sigma^2 of an observation at a pose, and whether it has 3 residuals;
