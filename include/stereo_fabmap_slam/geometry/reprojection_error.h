@@ -52,6 +52,16 @@ class ReprojectionError {
   double u_, v_, u_right_, inverse_sigma_;
 };
 
+// One observation's constants in the reprojection error: the rectified camera and what was
+// measured (u_right < 0: mono), as the costs below keep them.
+struct ProjectionConstants {
+  double fx = 0, fy = 0, cx = 0, cy = 0, fx_baseline = 0;
+  double u = 0, v = 0, u_right = -1, inverse_sigma = 1;
+
+  static ProjectionConstants Of(const geometry::StereoCamera& camera, double u, double v,
+                                double u_right, double sigma);
+};
+
 // ReprojectionError's expression with Jacobians derived by hand, and 3 residuals for either kind
 // of observation (a mono observation's third is 0, so that Ceres' Schur elimination sees one row
 // size). The observation can be set again: a bundle adjustment keeps one array of them from
@@ -64,13 +74,13 @@ class ReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3, 3> {
                 double** jacobians) const override;
 
  private:
-  double fx_ = 0, fy_ = 0, cx_ = 0, cy_ = 0, fx_baseline_ = 0;
-  double u_ = 0, v_ = 0, u_right_ = -1, inverse_sigma_ = 1;
+  ProjectionConstants constants_;
 };
 
 // The same error for a point held fixed (motion-only optimisation): the point is part of the
 // cost function, so the problem has only the two pose blocks. Settable again, as ReprojectionCost:
-// a pose refinement allocates one array of them, not one cost per observation.
+// a pose refinement allocates one array of them for its rounds, not one cost per residual and
+// round.
 class FixedPointReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3> {
  public:
   void Set(const geometry::StereoCamera& camera, const Eigen::Vector3d& point, double u, double v,
@@ -79,7 +89,7 @@ class FixedPointReprojectionCost final : public ceres::SizedCostFunction<3, 4, 3
                 double** jacobians) const override;
 
  private:
-  ReprojectionCost projection_;
+  ProjectionConstants constants_;
   Eigen::Vector3d point_ = Eigen::Vector3d::Zero();
 };
 
