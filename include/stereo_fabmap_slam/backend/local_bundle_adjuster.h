@@ -63,7 +63,7 @@ class LocalBundleAdjuster {
   std::unordered_map<std::int64_t, Point> points_;
   std::deque<std::int64_t> window_;
   // The residuals' costs, reused by every problem (each lives for one solve): no allocation per
-  // residual, and the costs lie in memory in the order Ceres evaluates them.
+  // residual; they lie in memory in the order the residuals are added, point by point.
   std::unique_ptr<geometry::ReprojectionCost[]> costs_;
   std::size_t costs_capacity_ = 0;
 };
