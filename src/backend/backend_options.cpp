@@ -25,6 +25,7 @@ void BundleAdjustmentOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("rounds", &rounds);
   visitor.Visit("sigma", &sigma);
   visitor.Visit("threads", &threads);
+  visitor.Visit("step_covariances", &step_covariances);
 }
 
 void BundleAdjustmentOptions::Validate() const {
@@ -41,6 +42,7 @@ void BundleAdjustmentOptions::Validate() const {
 void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("odometry_translation_sigma", &odometry_translation_sigma);
   visitor.Visit("odometry_rotation_sigma_deg", &odometry_rotation_sigma_deg);
+  visitor.Visit("odometry_covariance_scale", &odometry_covariance_scale);
   visitor.Visit("loop_loss_scale", &loop_loss_scale);
   visitor.Visit("iterations", &iterations);
   visitor.Visit("consistent_loop_chi2", &consistent_loop_chi2);
@@ -54,6 +56,8 @@ void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
 void PoseGraphOptions::Validate() const {
   RequirePositive("odometry_translation_sigma", odometry_translation_sigma);
   RequirePositive("odometry_rotation_sigma_deg", odometry_rotation_sigma_deg);
+  if (!(odometry_covariance_scale >= 0))
+    throw std::invalid_argument("pose_graph.odometry_covariance_scale must be >= 0");
   RequirePositive("loop_loss_scale", loop_loss_scale);
   if (iterations < 1) {
     throw std::invalid_argument("pose_graph.iterations must be >= 1, got " +

@@ -8,6 +8,7 @@
 
 #include <ceres/ceres.h>
 
+#include "stereo_fabmap_slam/backend/window_covariance.h"
 #include "stereo_fabmap_slam/geometry/chi_square.h"
 #include "stereo_fabmap_slam/geometry/pose_parameters.h"
 #include "stereo_fabmap_slam/geometry/reprojection_error.h"
@@ -140,6 +141,8 @@ map::KeyframeUpdate LocalBundleAdjuster::Optimise() {
     if (rejected.size() == rejected_before) break;
   }
 
+  if (options_.step_covariances)
+    StepCovariances(point_ids, poses, free_keyframes, rejected, &update);
   for (const std::int64_t id : free_keyframes) {
     keyframes_[id].T_world_camera = poses[id].ToTransform().inverse();
     update.keyframe_poses.emplace_back(id, keyframes_[id].T_world_camera);
@@ -169,6 +172,37 @@ map::KeyframeUpdate LocalBundleAdjuster::Optimise() {
     }
   }
   return update;
+}
+
+void LocalBundleAdjuster::StepCovariances(
+    const std::set<std::int64_t>& point_ids,
+    const std::map<std::int64_t, geometry::PoseParameters>& poses,
+    const std::set<std::int64_t>& free_keyframes,
+    const std::set<std::pair<std::int64_t, std::int64_t>>& rejected,
+    map::KeyframeUpdate* update) const {
+  WindowCovariance covariance(camera_, options_.sigma, std::sqrt(geometry::kChiSquare95ThreeDof));
+  std::map<std::int64_t, int> index;
+  for (const auto& [id, pose] : poses) {
+    index[id] = covariance.AddPose(pose.ToTransform().inverse(), free_keyframes.count(id) > 0);
+  }
+  std::vector<WindowCovariance::Observation> observations;
+  for (const std::int64_t p : point_ids) {
+    const Point& point = points_.at(p);
+    observations.clear();
+    for (const Observation& o : point.observations) {
+      if (!rejected.count({p, o.keyframe})) {
+        observations.push_back({index.at(o.keyframe), o.u, o.v, o.u_right});
+      }
+    }
+    if (observations.size() >= 2) covariance.AddPoint(point.position, observations);
+  }
+  if (!covariance.Compute()) return;
+  for (std::size_t i = 1; i < window_.size(); ++i) {
+    const std::int64_t from = window_[i - 1], to = window_[i];
+    if (!free_keyframes.count(to) || !index.count(from) || !index.count(to)) continue;
+    update->step_covariances.push_back(
+        {from, to, covariance.RelativeCovariance(index.at(from), index.at(to))});
+  }
 }
 
 std::map<std::int64_t, Eigen::Isometry3d> LocalBundleAdjuster::KeyframePoses() const {

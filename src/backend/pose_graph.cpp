@@ -51,6 +51,8 @@ void PoseGraph::AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_cam
   Keyframe keyframe;
   keyframe.id = id;
   keyframe.T_odom_camera = T_odom_camera;
+  keyframe.step_information = odometry_information_;
+  keyframe.step_sqrt_information = odometry_sqrt_information_;
   if (keyframes_.empty() || starts_new_segment) {
     // Nothing relates the new odometry frame to the old one; the newest correction is the best
     // guess there is, and it keeps the map pose continuous when odometry itself did not restart.
@@ -71,6 +73,26 @@ void PoseGraph::AddKeyframe(std::int64_t id, const Eigen::Isometry3d& T_odom_cam
     }
   }
   keyframes_.push_back(keyframe);
+}
+
+void PoseGraph::UpdateOdometryCovariance(std::int64_t from, std::int64_t to,
+                                         const Eigen::Matrix<double, 6, 6>& covariance) {
+  if (!(options_.odometry_covariance_scale > 0) || !Contains(from) || !Contains(to)) return;
+  const std::size_t i = IndexOf(to);
+  if (i == 0 || keyframes_[i - 1].id != from || keyframes_[i - 1].segment != keyframes_[i].segment)
+    return;
+  const Eigen::Matrix<double, 6, 6> scaled =
+      options_.odometry_covariance_scale * 0.5 * (covariance + covariance.transpose());
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> factor(scaled);
+  if (factor.info() != Eigen::Success) return;
+  const Eigen::Matrix<double, 6, 6> information =
+      factor.solve(Eigen::Matrix<double, 6, 6>::Identity());
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> information_factor(
+      0.5 * (information + information.transpose()));
+  if (information_factor.info() != Eigen::Success) return;
+  keyframes_[i].step_information = information;
+  // S with S^T S = information: the transposed lower factor (RelativePoseError's convention).
+  keyframes_[i].step_sqrt_information = information_factor.matrixL().transpose();
 }
 
 void PoseGraph::UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
@@ -336,7 +358,7 @@ void PoseGraph::Solve(const std::vector<bool>& moving, const std::vector<std::si
     if (a.segment != b.segment || !(moving[i - 1] || moving[i])) continue;
     problem.AddResidualBlock(
         geometry::RelativePoseError::Create(a.T_odom_camera.inverse() * b.T_odom_camera,
-                                            odometry_sqrt_information_),
+                                            b.step_sqrt_information),
         nullptr, a.q_map_camera.coeffs().data(), a.t_map_camera.data(),
         b.q_map_camera.coeffs().data(), b.t_map_camera.data());
   }
@@ -428,7 +450,7 @@ std::vector<PoseGraphEdge> PoseGraph::Edges() const {
     const Keyframe& a = keyframes_[i - 1];
     const Keyframe& b = keyframes_[i];
     if (a.segment != b.segment) continue;
-    edges.push_back({a.id, b.id, a.T_odom_camera.inverse() * b.T_odom_camera, odometry_information_,
+    edges.push_back({a.id, b.id, a.T_odom_camera.inverse() * b.T_odom_camera, b.step_information,
                      PoseGraphEdgeType::kOdometry});
   }
   for (const Gap& gap : gaps_) {

@@ -1,16 +1,6 @@
 #include "stereo_fabmap_slam/geometry/pose_covariance.h"
 
 namespace stereo_fabmap_slam::geometry {
-namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-// Ad(T) for the (translation, rotation) order: delta in frame b maps to Ad * delta in frame a
-// when T = T_a_b.
 Eigen::Matrix<double, 6, 6> Adjoint(const Eigen::Isometry3d& T) {
   Eigen::Matrix<double, 6, 6> adjoint = Eigen::Matrix<double, 6, 6>::Zero();
   const Eigen::Matrix3d R = T.rotation();
@@ -20,7 +10,14 @@ Eigen::Matrix<double, 6, 6> Adjoint(const Eigen::Isometry3d& T) {
   return adjoint;
 }
 
-}  // namespace
+Eigen::Matrix3d StereoProjectionJacobian(const StereoCamera& camera, const Eigen::Vector3d& p) {
+  const double inverse_z = 1.0 / p.z();
+  Eigen::Matrix3d projection;
+  projection << camera.fx * inverse_z, 0, -camera.fx * p.x() * inverse_z * inverse_z,  //
+      0, camera.fy * inverse_z, -camera.fy * p.y() * inverse_z * inverse_z,            //
+      camera.fx * inverse_z, 0, -camera.fx * (p.x() - camera.baseline) * inverse_z * inverse_z;
+  return projection;
+}
 
 PoseCovariance StereoPoseCovariance(const StereoCamera& camera,
                                     const std::vector<ObservedPoint>& points, double pixel_sigma) {
@@ -29,12 +26,7 @@ PoseCovariance StereoPoseCovariance(const StereoCamera& camera,
   for (const ObservedPoint& point : points) {
     const Eigen::Vector3d& p = point.camera;
     if (p.z() <= 0) continue;
-    const double inverse_z = 1.0 / p.z();
-    // d(u, v, u_right)/dp of the rectified stereo projection.
-    Eigen::Matrix<double, 3, 3> projection;
-    projection << camera.fx * inverse_z, 0, -camera.fx * p.x() * inverse_z * inverse_z,  //
-        0, camera.fy * inverse_z, -camera.fy * p.y() * inverse_z * inverse_z,            //
-        camera.fx * inverse_z, 0, -camera.fx * (p.x() - camera.baseline) * inverse_z * inverse_z;
+    const Eigen::Matrix3d projection = StereoProjectionJacobian(camera, p);
     // The point in the perturbed camera T * Exp(delta) is Exp(-delta) * p: dp/dtranslation =
     // -I, dp/drotation = [p]x.
     Eigen::Matrix<double, 3, 6> point_jacobian;

@@ -2,15 +2,11 @@
 
 #include <limits>
 
+#include "stereo_fabmap_slam/geometry/pose_covariance.h"
+
 namespace stereo_fabmap_slam::geometry {
 
 namespace {
-
-Eigen::Matrix3d CrossProductMatrix(const Eigen::Vector3d& a) {
-  Eigen::Matrix3d hat;
-  hat << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
-  return hat;
-}
 
 // The residual of ReprojectionError and its Jacobians, by hand: Ceres' automatic derivatives of
 // the same expression cost a dual number of 10 (or 7) components per operation, and bundle
@@ -59,7 +55,7 @@ void EvaluateProjection(const ProjectionConstants& constants, const double* rota
     jacobian = d_c;
   }
   if (d_point == nullptr && d_rotation == nullptr) return;
-  const Eigen::Matrix3d vec_hat = CrossProductMatrix(vec);
+  const Eigen::Matrix3d vec_hat = Skew(vec);
   if (d_point != nullptr) {
     // d c / d p = I + 2 w [vec]x + 2 [vec]x [vec]x: the rotation matrix of a unit quaternion.
     Eigen::Map<Block3> jacobian(d_point);
@@ -67,9 +63,9 @@ void EvaluateProjection(const ProjectionConstants& constants, const double* rota
   }
   if (d_rotation != nullptr) {
     // d c / d vec = -2 w [p]x - 2 [vec]x [p]x - [uv]x; d c / d w = uv.
-    const Eigen::Matrix3d p_hat = CrossProductMatrix(p);
+    const Eigen::Matrix3d p_hat = Skew(p);
     Eigen::Matrix<double, 3, 4> d_c_d_q;
-    d_c_d_q.leftCols<3>() = -2.0 * w * p_hat - 2.0 * vec_hat * p_hat - CrossProductMatrix(uv);
+    d_c_d_q.leftCols<3>() = -2.0 * w * p_hat - 2.0 * vec_hat * p_hat - Skew(uv);
     d_c_d_q.col(3) = uv;
     Eigen::Map<Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> jacobian(d_rotation);
     jacobian = d_c * d_c_d_q;

@@ -46,7 +46,11 @@ MappingStage::MappingStage(const backend::BundleAdjustmentOptions& bundle_adjust
     : bundle_adjustment_options_(bundle_adjustment),
       pose_graph_options_(pose_graph),
       clock_(std::move(clock)),
-      graph_(pose_graph) {}
+      graph_(pose_graph) {
+  // A pose graph that weighs its odometry edges by the steps' covariances needs the bundle
+  // adjustment to estimate them.
+  if (pose_graph.odometry_covariance_scale > 0) bundle_adjustment_options_.step_covariances = true;
+}
 
 MappingBatchResult MappingStage::Take(const std::vector<MappingInput>& batch) {
   MappingBatchResult result;
@@ -166,6 +170,9 @@ MappedKeyframe MappingStage::AddKeyframe(const map::Keyframe& keyframe,
   mapped.starts_new_segment = keyframe.starts_new_segment || next_starts_new_segment_;
   next_starts_new_segment_ = false;
   graph_.AddKeyframe(keyframe.id, T_odom_camera, mapped.starts_new_segment);
+  for (const map::KeyframeUpdate::StepCovariance& step : mapped.update.step_covariances) {
+    graph_.UpdateOdometryCovariance(step.from, step.to, step.covariance);
+  }
   if (after_loss && last_graph_keyframe_time_) {
     graph_.AddGap(keyframe.id, keyframe.timestamp - *last_graph_keyframe_time_);
   }

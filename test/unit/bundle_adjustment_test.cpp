@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -143,6 +144,84 @@ TEST(LocalBundleAdjuster, RemovesGrossOutliers) {
   for (const map::Keyframe& k : problem.keyframes) adjuster.AddKeyframe(k);
   const auto poses = adjuster.KeyframePoses();
   EXPECT_LT((poses.at(3).translation() - problem.true_poses[3].translation()).norm(), 0.01);
+}
+
+// The step covariances the window reports describe how its estimates scatter: four keyframes
+// 0.3 m apart passing a wall of 300 points, observed with 1 px noise (the options' sigma) in 100
+// independent draws; each draw's final step (keyframe 2 -> 3, the whole window optimised
+// together) is compared with the truth through the reported covariance. If the covariance is
+// right, the squared Mahalanobis error is chi-square with 6 degrees of freedom: its mean over 100
+// draws is 6 with a standard deviation of sqrt(12 / 100) = 0.35, so the bounds 4.5 - 7.5 leave
+// four standard deviations (plus the Huber loss's and the outlier test's few down-weighted
+// residuals, which the covariance accounts for); a covariance off by a factor of two gives 3 or
+// 12. The translation's variance alone (a sum of 100 chi-square-3 variables over 3) is checked
+// against the reported one within the same relative spread.
+TEST(LocalBundleAdjuster, StepCovarianceMatchesTheSpreadOfRepeatedEstimates) {
+  constexpr int kDraws = 100;
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 300; ++i) {
+    points.emplace_back(unit(random) * 4 - 1, unit(random) * 3 - 1.5, 3 + unit(random) * 4);
+  }
+  std::vector<Eigen::Isometry3d> truth;
+  for (int k = 0; k < 4; ++k) truth.push_back(Pose(0.03 * k, {0.3 * k, 0.02 * k, 0.05 * k}));
+  const Eigen::Isometry3d true_step = truth[2].inverse() * truth[3];
+
+  backend::BundleAdjustmentOptions options;
+  options.window = 4;
+  options.step_covariances = true;
+  double nees_sum = 0, translation_nees_sum = 0;
+  int draws = 0;
+  for (int draw = 0; draw < kDraws; ++draw) {
+    std::normal_distribution<double> noise(0, options.sigma);
+    backend::LocalBundleAdjuster adjuster(options, kCamera);
+    map::KeyframeUpdate update;
+    for (int k = 0; k < 4; ++k) {
+      map::Keyframe keyframe;
+      keyframe.id = k;
+      keyframe.timestamp = k;
+      keyframe.T_world_camera = truth[k];
+      for (std::size_t p = 0; p < points.size(); ++p) {
+        const Eigen::Vector3d pixels = kCamera.Project(truth[k].inverse() * points[p]);
+        if (pixels.x() < 0 || pixels.x() >= 752 || pixels.y() < 0 || pixels.y() >= 480) continue;
+        const cv::KeyPoint keypoint(static_cast<float>(pixels.x() + noise(random)),
+                                    static_cast<float>(pixels.y() + noise(random)), 7);
+        const float u_right = static_cast<float>(pixels.z() + noise(random));
+        keyframe.features.keypoints.push_back(keypoint);
+        keyframe.features.u_right.push_back(u_right);
+        keyframe.features.points.push_back(
+            kCamera.Triangulate(keypoint.pt.x, keypoint.pt.y, keypoint.pt.x - u_right));
+        keyframe.map_point_ids.push_back(static_cast<std::int64_t>(p));
+      }
+      keyframe.features.descriptors =
+          cv::Mat::zeros(static_cast<int>(keyframe.features.keypoints.size()), 64, CV_8U);
+      update = adjuster.AddKeyframe(keyframe);
+    }
+    const auto step = std::find_if(
+        update.step_covariances.begin(), update.step_covariances.end(),
+        [](const map::KeyframeUpdate::StepCovariance& s) { return s.from == 2 && s.to == 3; });
+    ASSERT_NE(step, update.step_covariances.end()) << "draw " << draw;
+    const auto poses = adjuster.KeyframePoses();
+    // The estimated step's deviation from the true one, on its right: (translation, rotation).
+    const Eigen::Isometry3d deviation = true_step.inverse() * (poses.at(2).inverse() * poses.at(3));
+    Eigen::Matrix<double, 6, 1> error;
+    error.head<3>() = deviation.translation();
+    const Eigen::AngleAxisd angle_axis(deviation.rotation());
+    error.tail<3>() = angle_axis.angle() * angle_axis.axis();
+    nees_sum += error.dot(step->covariance.ldlt().solve(error));
+    translation_nees_sum +=
+        error.head<3>().dot(step->covariance.topLeftCorner<3, 3>().ldlt().solve(error.head<3>()));
+    ++draws;
+  }
+  const double nees = nees_sum / draws, translation_nees = translation_nees_sum / draws;
+  RecordProperty("mean_nees_6dof", std::to_string(nees));
+  RecordProperty("mean_nees_translation", std::to_string(translation_nees));
+  EXPECT_GT(nees, 4.5);
+  EXPECT_LT(nees, 7.5);
+  // chi-square 3 over 100 draws: mean 3, standard deviation sqrt(6 / 100) = 0.24.
+  EXPECT_GT(translation_nees, 2.0);
+  EXPECT_LT(translation_nees, 4.0);
 }
 
 // The hand-derived Jacobians of the reprojection error equal Ceres' automatic derivatives of the

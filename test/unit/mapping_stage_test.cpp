@@ -73,6 +73,44 @@ TEST_F(MappingStageTest, KeyframesJoinTheGraphAndTheMapIsTheFirstOnesPiece) {
   EXPECT_THROW(stage_.MapPose(99), std::out_of_range);
 }
 
+// With the pose graph weighing its odometry edges by the bundle adjustment's step covariances,
+// the stage has the adjuster estimate them and the graph's edges carry them: keyframes that
+// share their points (the same ids each time) give each step a covariance of millimetres, whose
+// information is far above the fixed sigmas' (2 cm: 2,500 / m^2). Without the option the edges
+// keep the fixed sigmas and the updates carry no covariances.
+TEST_F(MappingStageTest, StepCovariancesReachThePoseGraphsOdometryEdgesWhenAsked) {
+  // Each observation's id: the world point it is (exact observations: the nearest one).
+  const auto shared_points = [this](std::int64_t id) {
+    map::Keyframe keyframe = Keyframe(id);
+    for (std::size_t k = 0; k < keyframe.map_point_ids.size(); ++k) {
+      const Eigen::Vector3d point = keyframe.T_world_camera * keyframe.features.points[k];
+      std::size_t nearest = 0;
+      for (std::size_t i = 1; i < world_.points.size(); ++i) {
+        if ((world_.points[i] - point).norm() < (world_.points[nearest] - point).norm())
+          nearest = i;
+      }
+      keyframe.map_point_ids[k] = static_cast<std::int64_t>(nearest);
+    }
+    return keyframe;
+  };
+  backend::PoseGraphOptions weighed;
+  weighed.odometry_covariance_scale = 1.0;
+  pipeline::MappingStage stage(backend::BundleAdjustmentOptions(), weighed, [] { return 0.0; });
+  std::size_t covariances = 0;
+  for (std::int64_t id = 0; id < 4; ++id) {
+    covariances += stage.AddKeyframe(shared_points(id), kTestCamera).update.step_covariances.size();
+    EXPECT_TRUE(stage_.AddKeyframe(shared_points(id), kTestCamera).update.step_covariances.empty());
+  }
+  EXPECT_GE(covariances, 3u);
+  const Eigen::Matrix<double, 6, 6> fixed = stage_.pose_graph().Edges().front().information;
+  for (const backend::PoseGraphEdge& edge : stage.pose_graph().Edges()) {
+    EXPECT_GT(edge.information(0, 0), 100 * fixed(0, 0)) << edge.from << " -> " << edge.to;
+  }
+  for (const backend::PoseGraphEdge& edge : stage_.pose_graph().Edges()) {
+    EXPECT_TRUE(edge.information.isApprox(fixed)) << edge.from << " -> " << edge.to;
+  }
+}
+
 TEST_F(MappingStageTest, AnEdgeWaitsForItsKeyframesThenJoinsTheSegments) {
   stage_.AddKeyframe(Keyframe(0), kTestCamera);
   stage_.AddKeyframe(Keyframe(1), kTestCamera);

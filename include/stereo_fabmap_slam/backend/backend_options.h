@@ -15,6 +15,11 @@ struct BundleAdjustmentOptions {
   int rounds = 2;
   double sigma = 1.0;  // [px] key point position noise
   int threads = 1;
+  // Also the covariance of each step between consecutive keyframes of the window, at the
+  // optimum (WindowCovariance; about 4 % of the adjustment's time). The mapping stage turns it on
+  // when the pose graph weighs its odometry edges by them
+  // (PoseGraphOptions::odometry_covariance_scale).
+  bool step_covariances = false;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;
@@ -31,6 +36,14 @@ struct PoseGraphOptions {
   // Heading error is what turns into most of the position drift; 0.1 degrees per keyframe random
   // walks to ~1 degree over 100 keyframes, what stereo odometry shows over a few tens of metres.
   double odometry_rotation_sigma_deg = 0.1;  // [deg]
+  // > 0: an odometry edge whose step the bundle adjustment's window estimated carries that
+  // covariance times this instead of the sigmas above (BundleAdjustmentOptions::
+  // step_covariances). The estimate is right for the step alone (1 is its scale: on the rendered
+  // routes the steps' length and angle errors are 0.6-1.4 of its sigmas, RMS), but consecutive
+  // steps share points and biases, which the graph's independent edges cannot say; with 1 the
+  // 4-lap hall route and the office loop close far better and the kidnaps worse
+  // (docs/benchmarks.md), so 0, the fixed sigmas, stays the default.
+  double odometry_covariance_scale = 0;
   // Cauchy loss on loop edges, in units of the whitened residual (standard deviations). Cauchy
   // rather than Huber because its pull falls off as 1/residual: a wrong loop that survived
   // place recognition and geometric verification (repeated structure) ends up metres, i.e.

@@ -4,12 +4,15 @@
 #include <deque>
 #include <map>
 #include <memory>
+#include <set>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/geometry/pose_parameters.h"
 #include "stereo_fabmap_slam/geometry/reprojection_error.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
@@ -56,6 +59,13 @@ class LocalBundleAdjuster {
   };
 
   map::KeyframeUpdate Optimise();
+  // The covariance of each step between consecutive keyframes of the window (the later one free)
+  // at the optimum just found (WindowCovariance), into update->step_covariances.
+  void StepCovariances(const std::set<std::int64_t>& point_ids,
+                       const std::map<std::int64_t, geometry::PoseParameters>& poses,
+                       const std::set<std::int64_t>& free_keyframes,
+                       const std::set<std::pair<std::int64_t, std::int64_t>>& rejected,
+                       map::KeyframeUpdate* update) const;
 
   BundleAdjustmentOptions options_;
   geometry::StereoCamera camera_;

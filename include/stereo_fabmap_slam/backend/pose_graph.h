@@ -57,6 +57,12 @@ class PoseGraph {
   // Bundle adjustment moved a keyframe in odom: the odometry edges touching it follow (at the
   // next Optimize(), or at once in a piece without loops). Throws for unknown ids.
   void UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera);
+  // The bundle adjustment's covariance of the step from keyframe `from` to `to`: with
+  // options.odometry_covariance_scale > 0, the odometry edge between them carries it (scaled)
+  // instead of the fixed sigmas. Ignored if the two are not consecutive keyframes of one
+  // segment, if either is unknown, or if the covariance is not positive definite.
+  void UpdateOdometryCovariance(std::int64_t from, std::int64_t to,
+                                const Eigen::Matrix<double, 6, 6>& covariance);
   // Throws std::invalid_argument for unknown ids, a loop of a keyframe with itself, or an
   // information matrix that is not symmetric positive definite. A loop joining two pieces
   // moves the younger one rigidly onto the older one through this edge at once, so that the edge
@@ -116,6 +122,10 @@ class PoseGraph {
     // solution and writes into place.
     Eigen::Quaterniond q_map_camera;
     Eigen::Vector3d t_map_camera;
+    // Information of the odometry edge from the keyframe before (the same segment's), and its
+    // square root: the fixed sigmas' unless UpdateOdometryCovariance gave the step's own.
+    Eigen::Matrix<double, 6, 6> step_information;
+    Eigen::Matrix<double, 6, 6> step_sqrt_information;
 
     Eigen::Isometry3d MapPose() const;
     void SetMapPose(const Eigen::Isometry3d& T_map_camera);

@@ -13,6 +13,20 @@ namespace stereo_fabmap_slam::geometry {
 // perturbation applied on the right: T' = T * Exp(delta), i.e. expressed in the moving frame.
 using PoseCovariance = Eigen::Matrix<double, 6, 6>;
 
+// The cross-product matrix: Skew(a) * b = a x b (inline: the reprojection costs' Jacobians use it
+// per residual).
+inline Eigen::Matrix3d Skew(const Eigen::Vector3d& a) {
+  Eigen::Matrix3d hat;
+  hat << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
+  return hat;
+}
+// Ad(T) for the (translation, rotation) order: T * Exp(delta) * T^-1 = Exp(Ad(T) * delta), so a
+// perturbation in frame b maps to Ad * delta in frame a when T = T_a_b.
+Eigen::Matrix<double, 6, 6> Adjoint(const Eigen::Isometry3d& T);
+// d(u_left, v, u_right) / d(point in the left camera frame) of the rectified stereo projection;
+// the point must have z > 0.
+Eigen::Matrix3d StereoProjectionJacobian(const StereoCamera& camera, const Eigen::Vector3d& p);
+
 // One stereo observation of a known point: its position in the camera frame, and whether the
 // right image saw it too (three residuals u, v, u_right) or only the left (two).
 struct ObservedPoint {
