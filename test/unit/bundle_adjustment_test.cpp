@@ -30,6 +30,34 @@ struct Problem {
   std::vector<map::Keyframe> keyframes;
 };
 
+// A keyframe at `estimate` that observed the points in view from `truth`, each pixel coordinate
+// with the noise drawn from `noise` (one distribution for all keyframes, drawn in order, so that
+// a problem is the same every time), and triangulated from those noisy observations.
+map::Keyframe NoisyKeyframe(int id, const Eigen::Isometry3d& truth,
+                            const Eigen::Isometry3d& estimate,
+                            const std::vector<Eigen::Vector3d>& points,
+                            std::normal_distribution<double>* noise, std::mt19937_64* random) {
+  map::Keyframe keyframe;
+  keyframe.id = id;
+  keyframe.timestamp = id;
+  keyframe.T_world_camera = estimate;
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const Eigen::Vector3d pixels = kCamera.Project(truth.inverse() * points[p]);
+    if (pixels.x() < 0 || pixels.x() >= 752 || pixels.y() < 0 || pixels.y() >= 480) continue;
+    const cv::KeyPoint keypoint(static_cast<float>(pixels.x() + (*noise)(*random)),
+                                static_cast<float>(pixels.y() + (*noise)(*random)), 7);
+    const float u_right = static_cast<float>(pixels.z() + (*noise)(*random));
+    keyframe.features.keypoints.push_back(keypoint);
+    keyframe.features.u_right.push_back(u_right);
+    keyframe.features.points.push_back(
+        kCamera.Triangulate(keypoint.pt.x, keypoint.pt.y, keypoint.pt.x - u_right));
+    keyframe.map_point_ids.push_back(static_cast<std::int64_t>(p));
+  }
+  keyframe.features.descriptors =
+      cv::Mat::zeros(static_cast<int>(keyframe.features.keypoints.size()), 64, CV_8U);
+  return keyframe;
+}
+
 Problem MakeProblem() {
   std::mt19937_64 random(3);
   std::uniform_real_distribution<double> unit(0, 1);
@@ -39,33 +67,13 @@ Problem MakeProblem() {
     problem.true_points.emplace_back(unit(random) * 6 - 1, unit(random) * 3 - 1.5,
                                      4 + unit(random) * 3);
   }
-  std::vector<bool> introduced(problem.true_points.size(), false);
   for (int k = 0; k < 6; ++k) {
     const Eigen::Isometry3d truth = Pose(0.02 * k, {0.8 * k, 0.05 * k, 0.1 * k});
     problem.true_poses.push_back(truth);
     const Eigen::Isometry3d estimate =
         k == 0 ? truth : truth * Pose(0.015 * (k % 2 ? 1 : -1), {0.03, -0.02 * k / 5.0, 0.04});
-    map::Keyframe keyframe;
-    keyframe.id = k;
-    keyframe.timestamp = k;
-    keyframe.T_world_camera = estimate;
-    for (std::size_t p = 0; p < problem.true_points.size(); ++p) {
-      const Eigen::Vector3d c = truth.inverse() * problem.true_points[p];
-      const Eigen::Vector3d pixels = kCamera.Project(c);
-      if (pixels.x() < 0 || pixels.x() >= 752 || pixels.y() < 0 || pixels.y() >= 480) continue;
-      cv::KeyPoint keypoint(static_cast<float>(pixels.x() + noise(random)),
-                            static_cast<float>(pixels.y() + noise(random)), 7);
-      const float u_right = static_cast<float>(pixels.z() + noise(random));
-      keyframe.features.keypoints.push_back(keypoint);
-      keyframe.features.u_right.push_back(u_right);
-      keyframe.features.points.push_back(
-          kCamera.Triangulate(keypoint.pt.x, keypoint.pt.y, keypoint.pt.x - u_right));
-      keyframe.map_point_ids.push_back(static_cast<std::int64_t>(p));
-      introduced[p] = true;
-    }
-    keyframe.features.descriptors =
-        cv::Mat::zeros(static_cast<int>(keyframe.features.keypoints.size()), 64, CV_8U);
-    problem.keyframes.push_back(std::move(keyframe));
+    problem.keyframes.push_back(
+        NoisyKeyframe(k, truth, estimate, problem.true_points, &noise, &random));
   }
   return problem;
 }
@@ -178,25 +186,7 @@ TEST(LocalBundleAdjuster, StepCovarianceMatchesTheSpreadOfRepeatedEstimates) {
     backend::LocalBundleAdjuster adjuster(options, kCamera);
     map::KeyframeUpdate update;
     for (int k = 0; k < 4; ++k) {
-      map::Keyframe keyframe;
-      keyframe.id = k;
-      keyframe.timestamp = k;
-      keyframe.T_world_camera = truth[k];
-      for (std::size_t p = 0; p < points.size(); ++p) {
-        const Eigen::Vector3d pixels = kCamera.Project(truth[k].inverse() * points[p]);
-        if (pixels.x() < 0 || pixels.x() >= 752 || pixels.y() < 0 || pixels.y() >= 480) continue;
-        const cv::KeyPoint keypoint(static_cast<float>(pixels.x() + noise(random)),
-                                    static_cast<float>(pixels.y() + noise(random)), 7);
-        const float u_right = static_cast<float>(pixels.z() + noise(random));
-        keyframe.features.keypoints.push_back(keypoint);
-        keyframe.features.u_right.push_back(u_right);
-        keyframe.features.points.push_back(
-            kCamera.Triangulate(keypoint.pt.x, keypoint.pt.y, keypoint.pt.x - u_right));
-        keyframe.map_point_ids.push_back(static_cast<std::int64_t>(p));
-      }
-      keyframe.features.descriptors =
-          cv::Mat::zeros(static_cast<int>(keyframe.features.keypoints.size()), 64, CV_8U);
-      update = adjuster.AddKeyframe(keyframe);
+      update = adjuster.AddKeyframe(NoisyKeyframe(k, truth[k], truth[k], points, &noise, &random));
     }
     const auto step = std::find_if(
         update.step_covariances.begin(), update.step_covariances.end(),
