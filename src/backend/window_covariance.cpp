@@ -1,6 +1,5 @@
 #include "stereo_fabmap_slam/backend/window_covariance.h"
 
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
