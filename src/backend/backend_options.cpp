@@ -43,6 +43,7 @@ void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("odometry_translation_sigma", &odometry_translation_sigma);
   visitor.Visit("odometry_rotation_sigma_deg", &odometry_rotation_sigma_deg);
   visitor.Visit("odometry_covariance_scale", &odometry_covariance_scale);
+  visitor.Visit("odometry_covariance_plus_fixed", &odometry_covariance_plus_fixed);
   visitor.Visit("loop_loss_scale", &loop_loss_scale);
   visitor.Visit("iterations", &iterations);
   visitor.Visit("consistent_loop_chi2", &consistent_loop_chi2);

@@ -81,8 +81,9 @@ void PoseGraph::UpdateOdometryCovariance(std::int64_t from, std::int64_t to,
   const std::size_t i = IndexOf(to);
   if (i == 0 || keyframes_[i - 1].id != from || keyframes_[i - 1].segment != keyframes_[i].segment)
     return;
-  const Eigen::Matrix<double, 6, 6> scaled =
+  Eigen::Matrix<double, 6, 6> scaled =
       options_.odometry_covariance_scale * 0.5 * (covariance + covariance.transpose());
+  if (options_.odometry_covariance_plus_fixed) scaled += odometry_information_.inverse();
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> factor(scaled);
   if (factor.info() != Eigen::Success) return;
   const Eigen::Matrix<double, 6, 6> information =

@@ -505,6 +505,27 @@ TEST(PoseGraphTest, StepCovariancesPutTheCorrectionWhereTheOdometryWasWeak) {
   EXPECT_LT(estimated, 0.25 * fixed);
 }
 
+// With odometry_covariance_plus_fixed the edge carries the step's covariance plus the fixed
+// sigmas': its information is the inverse of the sum (to rounding).
+TEST(PoseGraphTest, StepCovariancePlusTheFixedSigmas) {
+  PoseGraphOptions options;
+  options.odometry_covariance_scale = 2.0;
+  options.odometry_covariance_plus_fixed = true;
+  PoseGraph graph(options);
+  graph.AddKeyframe(0, Eigen::Isometry3d::Identity(), false);
+  graph.AddKeyframe(1, Pose(Eigen::Vector3d(0.3, 0, 0), 0.1), false);
+  Eigen::Matrix<double, 6, 1> step_variance, fixed_variance;
+  step_variance << 1e-6, 2e-6, 3e-6, 1e-7, 2e-7, 3e-7;
+  fixed_variance << Eigen::Vector3d::Constant(0.02 * 0.02),
+      Eigen::Vector3d::Constant(std::pow(0.1 * kDegree, 2));
+  graph.UpdateOdometryCovariance(0, 1, step_variance.asDiagonal());
+  const Eigen::Matrix<double, 6, 1> expected =
+      (2.0 * step_variance + fixed_variance).cwiseInverse();
+  const Eigen::Matrix<double, 6, 6> information = graph.Edges().front().information;
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(information(i, i) / expected(i), 1.0, 1e-9) << i;
+  EXPECT_NEAR(information.norm(), expected.norm(), 1e-9 * expected.norm());
+}
+
 TEST(PoseGraphTest, RejectsBadInput) {
   PoseGraph graph = DriftingCircle();
   EXPECT_TRUE(graph.Contains(0));
@@ -558,6 +579,7 @@ TEST(PoseGraphTest, VisitListsEveryFieldOnce) {
             "  odometry_translation_sigma: 0.02\n"
             "  odometry_rotation_sigma_deg: 0.1\n"
             "  odometry_covariance_scale: 0\n"
+            "  odometry_covariance_plus_fixed: false\n"
             "  loop_loss_scale: 3.5\n"
             "  iterations: 30\n"
             "  consistent_loop_chi2: 16.8\n"
