@@ -12,7 +12,7 @@ WindowCovariance::WindowCovariance(const geometry::StereoCamera& camera, double 
     : camera_(camera), sigma_(sigma), huber_threshold_(huber_threshold) {}
 
 int WindowCovariance::AddPose(const Eigen::Isometry3d& T_world_camera, bool free) {
-  poses_.push_back(T_world_camera);
+  poses_.push_back(T_world_camera.inverse());
   free_index_.push_back(free ? free_count_++ : -1);
   return static_cast<int>(poses_.size()) - 1;
 }
@@ -32,8 +32,8 @@ void WindowCovariance::AddPoint(const Eigen::Vector3d& point_world,
   blocks.reserve(observations.size());
   Eigen::Matrix3d point_information = Eigen::Matrix3d::Zero();
   for (const Observation& o : observations) {
-    const Eigen::Isometry3d& T = poses_.at(static_cast<std::size_t>(o.pose));
-    const Eigen::Vector3d p = T.inverse() * point_world;
+    const Eigen::Isometry3d& T_camera_world = poses_.at(static_cast<std::size_t>(o.pose));
+    const Eigen::Vector3d p = T_camera_world * point_world;
     if (p.z() <= 0) continue;
     const int rows = o.u_right >= 0 ? 3 : 2;
     const Eigen::Vector3d predicted = camera_.Project(p);
@@ -51,7 +51,7 @@ void WindowCovariance::AddPoint(const Eigen::Vector3d& point_world,
     // The point in the perturbed camera T * Exp(delta) is Exp(-delta) * p.
     block.pose.leftCols<3>() = -projection;
     block.pose.rightCols<3>() = projection * geometry::Skew(p);
-    block.point = projection * T.linear().transpose();
+    block.point = projection * T_camera_world.linear();
     point_information += block.point.topRows(rows).transpose() * block.point.topRows(rows);
     blocks.push_back(block);
   }
@@ -103,7 +103,7 @@ geometry::PoseCovariance WindowCovariance::RelativeCovariance(int a, int b) cons
   // T_a^-1 T_b perturbed: Exp(-delta_a) T_a^-1 T_b Exp(delta_b)
   //   = T_ab Exp(-Ad(T_ab^-1) delta_a) Exp(delta_b), so delta_ab = delta_b - Ad(T_ab^-1) delta_a.
   const Eigen::Isometry3d T_ab =
-      poses_[static_cast<std::size_t>(a)].inverse() * poses_[static_cast<std::size_t>(b)];
+      poses_[static_cast<std::size_t>(a)] * poses_[static_cast<std::size_t>(b)].inverse();
   Eigen::Matrix<double, 6, 12> jacobian;
   jacobian.leftCols<6>() = -geometry::Adjoint(T_ab.inverse());
   jacobian.rightCols<6>().setIdentity();

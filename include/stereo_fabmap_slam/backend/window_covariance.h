@@ -43,7 +43,7 @@ class WindowCovariance {
 
   geometry::StereoCamera camera_;
   double sigma_, huber_threshold_;
-  std::vector<Eigen::Isometry3d> poses_;
+  std::vector<Eigen::Isometry3d> poses_;  // T_camera_world, inverted once for every observation
   std::vector<int> free_index_;  // per pose: its block in the reduced system, or -1 if fixed
   int free_count_ = 0;
   Eigen::MatrixXd reduced_;     // 6F x 6F: H_cc - H_cp H_pp^-1 H_pc
