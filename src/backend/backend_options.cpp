@@ -78,4 +78,26 @@ void PoseGraphOptions::Validate() const {
   RequirePositive("gap_chi2", gap_chi2);
 }
 
+void GlobalRefinementOptions::Visit(io::OptionVisitor& visitor) {
+  visitor.Visit("after_loop_closing", &after_loop_closing);
+  visitor.Visit("at_end", &at_end);
+  visitor.Visit("iterations", &iterations);
+  visitor.Visit("rounds", &rounds);
+  visitor.Visit("odometry_edge_below_shared_points", &odometry_edge_below_shared_points);
+  visitor.Visit("loop_information_scale", &loop_information_scale);
+  visitor.Visit("threads", &threads);
+}
+
+void GlobalRefinementOptions::Validate() const {
+  if (iterations < 1 || rounds < 1 || threads < 1) {
+    throw std::invalid_argument("global_refinement iterations, rounds and threads must be >= 1");
+  }
+  if (odometry_edge_below_shared_points < 0) {
+    throw std::invalid_argument("global_refinement.odometry_edge_below_shared_points must be >= 0");
+  }
+  if (!(loop_information_scale > 0)) {
+    throw std::invalid_argument("global_refinement.loop_information_scale must be > 0");
+  }
+}
+
 }  // namespace stereo_fabmap_slam::backend

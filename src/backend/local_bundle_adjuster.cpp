@@ -211,4 +211,12 @@ std::map<std::int64_t, Eigen::Isometry3d> LocalBundleAdjuster::KeyframePoses() c
   return poses;
 }
 
+void LocalBundleAdjuster::ForEachSharedPoint(
+    const std::function<void(const Eigen::Vector3d&, const std::vector<Observation>&)>& visit)
+    const {
+  for (const auto& [id, point] : points_) {
+    if (point.observations.size() >= 2) visit(point.position, point.observations);
+  }
+}
+
 }  // namespace stereo_fabmap_slam::backend

@@ -97,8 +97,12 @@ void PoseGraph::UpdateOdometryCovariance(std::int64_t from, std::int64_t to,
 }
 
 void PoseGraph::UpdateOdometryPose(std::int64_t id, const Eigen::Isometry3d& T_odom_camera) {
-  Keyframe& keyframe = keyframes_[IndexOf(id)];
+  const std::size_t index = IndexOf(id);
+  Keyframe& keyframe = keyframes_[index];
   keyframe.T_odom_camera = T_odom_camera;
+  // The window measured this keyframe again: its steps are the odometry's once more.
+  keyframe.refined_step.reset();
+  if (index + 1 < keyframes_.size()) keyframes_[index + 1].refined_step.reset();
   const Segment& piece = segments_[PieceOf(keyframe.segment)];
   if (piece.loops == 0) keyframe.SetMapPose(piece.T_map_odom * T_odom_camera);
 }
@@ -357,11 +361,9 @@ void PoseGraph::Solve(const std::vector<bool>& moving, const std::vector<std::si
     Keyframe& a = keyframes_[i - 1];
     Keyframe& b = keyframes_[i];
     if (a.segment != b.segment || !(moving[i - 1] || moving[i])) continue;
-    problem.AddResidualBlock(
-        geometry::RelativePoseError::Create(a.T_odom_camera.inverse() * b.T_odom_camera,
-                                            b.step_sqrt_information),
-        nullptr, a.q_map_camera.coeffs().data(), a.t_map_camera.data(),
-        b.q_map_camera.coeffs().data(), b.t_map_camera.data());
+    problem.AddResidualBlock(geometry::RelativePoseError::Create(Step(i), b.step_sqrt_information),
+                             nullptr, a.q_map_camera.coeffs().data(), a.t_map_camera.data(),
+                             b.q_map_camera.coeffs().data(), b.t_map_camera.data());
   }
   // Gaps kept and tried have the loops' robust loss: a wrong one pulls little before it is
   // refused.
@@ -451,8 +453,7 @@ std::vector<PoseGraphEdge> PoseGraph::Edges() const {
     const Keyframe& a = keyframes_[i - 1];
     const Keyframe& b = keyframes_[i];
     if (a.segment != b.segment) continue;
-    edges.push_back({a.id, b.id, a.T_odom_camera.inverse() * b.T_odom_camera, b.step_information,
-                     PoseGraphEdgeType::kOdometry});
+    edges.push_back({a.id, b.id, Step(i), b.step_information, PoseGraphEdgeType::kOdometry});
   }
   for (const Gap& gap : gaps_) {
     if (gap.state != Gap::State::kKept) continue;
@@ -478,6 +479,24 @@ std::size_t PoseGraph::IndexOf(std::int64_t id) const {
 
 void PoseGraph::RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera) {
   keyframes_[IndexOf(id)].SetMapPose(T_map_camera);
+}
+
+void PoseGraph::AdoptRefinement(const std::map<std::int64_t, Eigen::Isometry3d>& T_map_camera) {
+  for (const auto& [id, pose] : T_map_camera) static_cast<void>(IndexOf(id));  // known, first
+  for (const auto& [id, pose] : T_map_camera) keyframes_[IndexOf(id)].SetMapPose(pose);
+  for (std::size_t i = 1; i < keyframes_.size(); ++i) {
+    Keyframe& a = keyframes_[i - 1];
+    Keyframe& b = keyframes_[i];
+    if (a.segment == b.segment && T_map_camera.count(a.id) && T_map_camera.count(b.id)) {
+      b.refined_step = a.MapPose().inverse() * b.MapPose();
+    }
+  }
+}
+
+Eigen::Isometry3d PoseGraph::Step(std::size_t index) const {
+  const Keyframe& b = keyframes_[index];
+  return b.refined_step ? *b.refined_step
+                        : keyframes_[index - 1].T_odom_camera.inverse() * b.T_odom_camera;
 }
 
 bool PoseGraph::Connected(std::int64_t a, std::int64_t b) const {

@@ -61,9 +61,11 @@ void BackendNodelet::onInit() {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
   backend::BundleAdjustmentOptions options;
   backend::PoseGraphOptions pose_graph_options;
+  backend::GlobalRefinementOptions refinement_options;
   try {  // before any ROS object exists: a throw unloads cleanly
     options = ros_parameters::ReadModuleOptions(private_node, options);
     pose_graph_options = ros_parameters::ReadModuleOptions(private_node, pose_graph_options);
+    refinement_options = ros_parameters::ReadModuleOptions(private_node, refinement_options);
     ros_parameters::RejectUnknownParameters(
         private_node, {"config_file", "map_frame", "odom_frame", "publish_tf", "tf_rate"});
   } catch (const std::exception& error) {
@@ -72,8 +74,10 @@ void BackendNodelet::onInit() {
   }
   NODELET_INFO_STREAM("options in force:\n"
                       << ros_parameters::PrintedOptions(options)
-                      << ros_parameters::PrintedOptions(pose_graph_options));
+                      << ros_parameters::PrintedOptions(pose_graph_options)
+                      << ros_parameters::PrintedOptions(refinement_options));
   stage_.emplace(options, pose_graph_options, ros_wiring::SteadyMilliseconds);
+  stage_->SetGlobalRefinement(refinement_options);
   map_frame_ = private_node.param<std::string>("map_frame", "map");
   odom_frame_ = private_node.param<std::string>("odom_frame", "odom");
   const double tf_rate = private_node.param("tf_rate", 20.0);

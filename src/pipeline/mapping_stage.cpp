@@ -238,7 +238,16 @@ double MappingStage::Optimise() {
   const double start = clock_();
   last_optimisation_ = graph_.Optimize();
   ++optimisations_;
+  if (global_refinement_options_.after_loop_closing && !last_optimisation_.local &&
+      last_optimisation_.iterations > 0) {
+    RefineGlobally(global_refinement_options_);
+  }
   return clock_() - start;
+}
+
+void MappingStage::SetGlobalRefinement(const backend::GlobalRefinementOptions& options) {
+  options.Validate();
+  global_refinement_options_ = options;
 }
 
 void MappingStage::SetMode(SlamMode mode) {
@@ -247,6 +256,41 @@ void MappingStage::SetMode(SlamMode mode) {
     localization_correction_.reset();
   }
   mode_ = mode;
+}
+
+backend::GlobalRefinementSummary MappingStage::RefineGlobally(
+    const backend::GlobalRefinementOptions& options) {
+  // Without a loop there is nothing the windowed bundle adjustment has not refined already.
+  if (!bundle_adjuster_ || !camera_ || LoopEdges().empty()) return {};
+  ++global_refinements_;
+  backend::GlobalRefinement refinement(options, pose_graph_options_, *camera_,
+                                       bundle_adjustment_options_.sigma);
+  const std::map<std::int64_t, Eigen::Isometry3d> odometry = bundle_adjuster_->KeyframePoses();
+  const std::map<std::int64_t, Eigen::Isometry3d> map_poses = graph_.MapPoses();
+  // Per keyframe of the problem: T_map_odom, which carries a point it saw first into the map.
+  std::map<std::int64_t, Eigen::Isometry3d> corrections;
+  const std::int64_t anchor = map_poses.begin()->first;
+  for (const auto& [id, pose] : map_poses) {
+    if (!graph_.InMap(id)) continue;
+    const auto odometry_pose = odometry.find(id);
+    const bool has_points = odometry_pose != odometry.end();
+    refinement.AddKeyframe(id, pose, id == anchor || !has_points);
+    if (has_points) corrections[id] = pose * odometry_pose->second.inverse();
+  }
+  bundle_adjuster_->ForEachSharedPoint(
+      [&](const Eigen::Vector3d& point_odom,
+          const std::vector<backend::PointObservation>& observations) {
+        for (const backend::PointObservation& o : observations) {
+          const auto correction = corrections.find(o.keyframe);
+          if (correction == corrections.end()) continue;
+          refinement.AddPoint(correction->second * point_odom, observations);
+          return;
+        }
+      });
+  for (const backend::PoseGraphEdge& edge : graph_.Edges()) refinement.AddEdge(edge);
+  const backend::GlobalRefinementSummary summary = refinement.Solve();
+  graph_.AdoptRefinement(refinement.Poses());
+  return summary;
 }
 
 void MappingStage::SetLocalizationCorrection(const Eigen::Isometry3d& T_map_odom) {

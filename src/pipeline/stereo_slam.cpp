@@ -28,13 +28,24 @@ StereoSlam::StereoSlam(const FrontEndOptions& front_end_options,
 
 void StereoSlam::EnableLoopClosing(place_recognition::LoopDetector detector,
                                    const backend::PoseGraphOptions& pose_graph_options,
-                                   const relocalization::RelocalizerOptions& relocalizer_options) {
+                                   const relocalization::RelocalizerOptions& relocalizer_options,
+                                   const backend::GlobalRefinementOptions& refinement_options) {
   if (!record_.frames().empty()) {
     throw std::logic_error("StereoSlam::EnableLoopClosing after the first frame");
   }
   mapping_ = MappingStage(bundle_adjustment_options_, pose_graph_options, clock_);
+  mapping_.SetGlobalRefinement(refinement_options);
   place_.emplace(PlaceStage(std::move(detector), relocalizer_options, clock_), tracking_.camera());
   tracking_.SetRelocalizationOptions(relocalizer_options);
+}
+
+backend::GlobalRefinementSummary StereoSlam::RefineMap(
+    const backend::GlobalRefinementOptions& options) {
+  if (!place_) throw std::logic_error("StereoSlam::RefineMap without loop closing");
+  Synchronize();
+  const backend::GlobalRefinementSummary summary = mapping_.RefineGlobally(options);
+  PublishSnapshot();
+  return summary;
 }
 
 void StereoSlam::EnableConcurrentMapping(std::size_t queued_keyframes) {

@@ -234,6 +234,16 @@ int main(int argc, char** argv) {
     {  // the keyframes still being mapped (concurrent mapping) are part of the processing
       const double start = NowMs();
       slam.Synchronize();
+      if (place_options && options.global_refinement.at_end) {
+        const backend::GlobalRefinementSummary refined = slam.RefineMap(options.global_refinement);
+        if (!quiet) {
+          std::printf(
+              "Global refinement: %zu keyframes, %zu points, %zu observations, %zu edges, "
+              "%d iterations, cost %.1f -> %.1f, %.0f ms\n",
+              refined.keyframes, refined.points, refined.observations, refined.edges,
+              refined.iterations, refined.initial_cost, refined.final_cost, NowMs() - start);
+        }
+      }
       processing_ms += NowMs() - start;
     }
     const double wall_s = (NowMs() - wall_start) / 1000.0;
@@ -262,6 +272,7 @@ int main(int argc, char** argv) {
     summary.Add("cpu_time_s", cpu_s);
     summary.Add("realtime_factor", duration / (processing_ms / 1000.0));
     summary.Add("peak_rss_mb", PeakResidentMegabytes(), 1);
+    summary.Add("global_refinements", slam.mapping().global_refinements());
     slam.record().Write(output, slam.map_state(), &summary);
     if (dense_run) {
       dense_run->Finish(slam);

@@ -37,7 +37,7 @@ void SlamConfiguration::EnableLoopClosing(const place_recognition::PlaceRecognit
   slam->EnableLoopClosing(
       pipeline::PlaceStage::LoadDetector(place, loop_detection, rectifier.camera(),
                                          slam->descriptor_norm(), slam->max_match_distance()),
-      pose_graph, relocalization);
+      pose_graph, relocalization, global_refinement);
 }
 
 }  // namespace stereo_fabmap_slam::tools

@@ -22,6 +22,7 @@ struct SlamConfiguration {
   backend::BundleAdjustmentOptions bundle_adjustment;
   place_recognition::LoopDetectorOptions loop_detection;
   backend::PoseGraphOptions pose_graph;
+  backend::GlobalRefinementOptions global_refinement;
   relocalization::RelocalizerOptions relocalization;
   dense::StereoDepthOptions dense_depth;
   dense::FusionOptions dense_fusion;
@@ -34,6 +35,7 @@ struct SlamConfiguration {
     visit(bundle_adjustment);
     visit(loop_detection);
     visit(pose_graph);
+    visit(global_refinement);
     visit(relocalization);
     visit(dense_depth);
     visit(dense_fusion);

@@ -460,6 +460,38 @@ TEST(PoseGraphTest, OdometryUpdatesMoveEdges) {
   EXPECT_THROW(graph.UpdateOdometryPose(1000, moved), std::invalid_argument);
 }
 
+// A refinement of the whole map (here: the truth itself, as a perfect one would find it) is
+// adopted: the map poses are the refinement's, and the odometry edges measure its steps, so the
+// next optimisation, for a loop that agrees with the map, keeps it (the same truth to 1e-6)
+// instead of going back to the odometry's drifting steps and the 4.7 cm the loops alone leave
+// (LoopClosureRemovesDrift). The bundle adjustment moving a keyframe again gives its two edges
+// the odometry's steps back.
+TEST(PoseGraphTest, AnAdoptedRefinementStaysThroughTheNextOptimisation) {
+  const std::vector<Eigen::Isometry3d> truth = Circle();
+  PoseGraph graph = DriftingCircle();
+  AddTrueLoops(truth, &graph);
+  graph.Optimize();
+  EXPECT_GT(MaxPositionError(graph, truth), 0.02);
+  std::map<std::int64_t, Eigen::Isometry3d> refined;
+  for (int i = 0; i < kKeyframes; ++i) refined[i] = truth[i];
+  graph.AdoptRefinement(refined);
+  EXPECT_LT(MaxPositionError(graph, truth), 1e-9);
+  graph.AddLoop(TrueLoop(truth, 2, kPerLap + 2));
+  const backend::PoseGraphSummary summary = graph.Optimize();
+  EXPECT_TRUE(summary.local);  // the new loop agreed with the refined map
+  EXPECT_LT(MaxPositionError(graph, truth), 1e-6);
+  EXPECT_LT(MaxRotationError(graph, truth), 1e-6);
+
+  const Eigen::Isometry3d odometry_pose = DriftingOdometry(truth)[50];
+  graph.UpdateOdometryPose(50, odometry_pose);
+  const std::vector<backend::PoseGraphEdge> edges = graph.Edges();
+  const std::vector<Eigen::Isometry3d> odometry = DriftingOdometry(truth);
+  EXPECT_TRUE(IsNear(edges[49].T_from_to, odometry[49].inverse() * odometry[50], 1e-12));
+  EXPECT_TRUE(IsNear(edges[50].T_from_to, odometry[50].inverse() * odometry[51], 1e-12));
+  EXPECT_TRUE(IsNear(edges[51].T_from_to, truth[51].inverse() * truth[52], 1e-12));
+  EXPECT_THROW(graph.AdoptRefinement({{1000, truth[0]}}), std::invalid_argument);
+}
+
 // Odometry exact but for one step (keyframe 40 -> 41: 1 degree of yaw and 5 cm sideways), whose
 // bundle adjustment reported it weak (sigmas of that size) while every other step reported
 // 1 mm / 0.01 degrees. With the steps' covariances the loops' correction goes into the weak step

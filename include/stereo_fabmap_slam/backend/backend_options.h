@@ -96,4 +96,34 @@ struct PoseGraphOptions {
   void Validate() const;
 };
 
+// Bundle adjustment of the whole map after loop closing (GlobalRefinement).
+struct GlobalRefinementOptions {
+  static constexpr char kSection[] = "global_refinement";
+
+  // When the whole map is refined: after every optimisation of the whole pose graph (a loop
+  // that disagreed with the map: a closure that removed drift; the mapping stage, in both
+  // drivers), and at the end of an offline run (run_dataset). Both off: measured on ten routes
+  // the refinement is better on some and worse on others (docs/benchmarks.md).
+  bool after_loop_closing = false;
+  bool at_end = false;
+  // Levenberg-Marquardt iterations a round; a round more if the first found outliers
+  // (observations beyond the 95 % chi-square, as the windowed adjustment).
+  int iterations = 20;
+  int rounds = 2;
+  // An odometry edge of the pose graph (with the graph's information) joins the problem only for
+  // a step whose two keyframes share fewer points than this: where they share enough, the
+  // points measure the step themselves (the edge is the odometry's summary of the same points,
+  // and with the graph's fixed sigmas would hold every step equally stiff again); where they
+  // share few or none (blank walls, a tracking loss's gap) the edge keeps the step from
+  // floating. Three points fix a pose at the least; 10 leave room for noise and the outlier
+  // test's removals. 0: no odometry edges at all.
+  int odometry_edge_below_shared_points = 10;
+  // Loop and relocalization edges' information times this.
+  double loop_information_scale = 1.0;
+  int threads = 1;
+
+  void Visit(io::OptionVisitor& visitor);
+  void Validate() const;
+};
+
 }  // namespace stereo_fabmap_slam::backend

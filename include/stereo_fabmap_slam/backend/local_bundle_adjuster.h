@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -12,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/backend/point_observation.h"
 #include "stereo_fabmap_slam/geometry/pose_parameters.h"
 #include "stereo_fabmap_slam/geometry/reprojection_error.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
@@ -30,6 +32,8 @@ namespace stereo_fabmap_slam::backend {
 // Keeps every keyframe (pose and observations), so its memory grows with keyframes only.
 class LocalBundleAdjuster {
  public:
+  using Observation = PointObservation;
+
   LocalBundleAdjuster(const BundleAdjustmentOptions& options, const geometry::StereoCamera& camera);
 
   // Adds a keyframe and optimises the window; returns what changed. With optimise = false the
@@ -40,11 +44,12 @@ class LocalBundleAdjuster {
   // Latest pose (T_world_camera) of every keyframe so far, by id.
   std::map<std::int64_t, Eigen::Isometry3d> KeyframePoses() const;
 
+  // Every point seen by two keyframes or more (what informs poses), with its position (odom
+  // frame) and observations: what a refinement of the whole map needs.
+  void ForEachSharedPoint(const std::function<void(const Eigen::Vector3d&,
+                                                   const std::vector<Observation>&)>& visit) const;
+
  private:
-  struct Observation {
-    std::int64_t keyframe;
-    float u, v, u_right;
-  };
   struct Point {
     Eigen::Vector3d position;
     std::vector<Observation> observations;

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -86,6 +87,13 @@ class PoseGraph {
   // Sets a keyframe's map pose as a saved map had it (after AddKeyframe and AddLoop have rebuilt
   // the graph); throws for unknown ids.
   void RestoreMapPose(std::int64_t id, const Eigen::Isometry3d& T_map_camera);
+  // A refinement of the whole map (GlobalRefinement) put these keyframes here (T_map_camera):
+  // they take these map poses, and each odometry edge between two of them (consecutive
+  // keyframes of a segment) measures the refined step instead of the odometry's, so that later
+  // optimisations start from the refinement and keep it where no new loop says otherwise. Once
+  // the bundle adjustment moves a keyframe again (UpdateOdometryPose), its two edges measure the
+  // odometry's steps again. Throws std::invalid_argument for unknown ids.
+  void AdoptRefinement(const std::map<std::int64_t, Eigen::Isometry3d>& T_map_camera);
   // Optimises the pieces that have loops, from the current map poses. When every loop added
   // since the last Optimize() already agrees with the map (its squared whitened error below
   // options.consistent_loop_chi2), only the options.local_keyframes keyframes nearest those
@@ -126,6 +134,9 @@ class PoseGraph {
     // square root: the fixed sigmas' unless UpdateOdometryCovariance gave the step's own.
     Eigen::Matrix<double, 6, 6> step_information;
     Eigen::Matrix<double, 6, 6> step_sqrt_information;
+    // T_previous_this as a refinement of the whole map found it (AdoptRefinement), measured by
+    // the odometry edge from the keyframe before in place of the odometry poses' step.
+    std::optional<Eigen::Isometry3d> refined_step;
 
     Eigen::Isometry3d MapPose() const;
     void SetMapPose(const Eigen::Isometry3d& T_map_camera);
@@ -155,7 +166,9 @@ class PoseGraph {
   };
 
   std::size_t IndexOf(std::int64_t id) const;  // throws std::invalid_argument
-  int PieceOf(int segment) const;              // the root segment
+  // What the odometry edge into keyframes_[index] (from the one before, same segment) measures.
+  Eigen::Isometry3d Step(std::size_t index) const;
+  int PieceOf(int segment) const;  // the root segment
   // The squared whitened error of a loop at the current map poses.
   double LoopChiSquare(const Loop& loop) const;
   // A gap as an edge, from the latest odometry poses.

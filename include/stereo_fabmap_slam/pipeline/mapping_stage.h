@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "stereo_fabmap_slam/backend/backend_options.h"
+#include "stereo_fabmap_slam/backend/global_refinement.h"
 #include "stereo_fabmap_slam/backend/local_bundle_adjuster.h"
 #include "stereo_fabmap_slam/backend/pose_graph.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
@@ -119,6 +120,17 @@ class MappingStage : public MapState {
   // stages in lockstep waits for).
   double ApplyLoopDetection(std::int64_t keyframe_id, const std::optional<map::LoopEdge>& loop);
 
+  // Bundle adjustment of the whole map in the map frame (backend::GlobalRefinement): the
+  // keyframes joined to the map's first (which stays fixed, as does any keyframe of a loaded map,
+  // whose points are not kept), the points the bundle adjustment keeps, moved into the map frame
+  // with the keyframe that saw them first, and the graph's edges. The refined poses become the
+  // graph's map poses. Nothing to do (an empty summary) before the first keyframe.
+  backend::GlobalRefinementSummary RefineGlobally(const backend::GlobalRefinementOptions& options);
+  // The refinement's options; with options.after_loop_closing the stage refines the whole map
+  // after every optimisation of the whole pose graph (in its time: pose_graph_ms).
+  void SetGlobalRefinement(const backend::GlobalRefinementOptions& options);
+  std::uint64_t global_refinements() const { return global_refinements_; }
+
   // Localization mode leaves the graph as it is; map -> odom then follows the tracking stage's
   // relocalizations (SetLocalizationCorrection). Back in mapping mode, the next keyframe starts
   // a new segment: the keyframes of the localization time are not in the graph.
@@ -194,6 +206,8 @@ class MappingStage : public MapState {
   std::uint64_t relocalization_edges_received_ = 0;
   std::uint64_t optimisations_ = 0;
   backend::PoseGraphSummary last_optimisation_;
+  backend::GlobalRefinementOptions global_refinement_options_;
+  std::uint64_t global_refinements_ = 0;
 };
 
 }  // namespace stereo_fabmap_slam::pipeline

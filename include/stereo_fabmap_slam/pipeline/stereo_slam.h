@@ -58,7 +58,8 @@ class StereoSlam {
   // found; its relocalization edge joins the new segment to the map.
   void EnableLoopClosing(place_recognition::LoopDetector detector,
                          const backend::PoseGraphOptions& pose_graph_options,
-                         const relocalization::RelocalizerOptions& relocalizer_options = {});
+                         const relocalization::RelocalizerOptions& relocalizer_options = {},
+                         const backend::GlobalRefinementOptions& refinement_options = {});
   // Runs the mapping and place stages' keyframe work on a thread of its own from now on (before
   // the first frame). At most `queued_keyframes` keyframes wait for it; a tracker further ahead
   // waits. A frame that asks for a relocalization waits until the keyframes before it are
@@ -72,6 +73,10 @@ class StereoSlam {
   // The map as the last finished keyframe left it (a snapshot with concurrent mapping; the
   // mapping stage itself otherwise): safe to read between frames in either case.
   std::shared_ptr<const MapState> LatestMap() const;
+
+  // The whole map refined by bundle adjustment in the map frame (MappingStage::RefineGlobally),
+  // after the keyframes so far are mapped. Loop closing must be on.
+  backend::GlobalRefinementSummary RefineMap(const backend::GlobalRefinementOptions& options);
 
   void SetMode(SlamMode mode);
   SlamMode mode() const { return mapping_.mode(); }
