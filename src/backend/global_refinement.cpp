@@ -205,12 +205,9 @@ GlobalRefinementSummary GlobalRefinement::Solve() {
       const Point& point = points_[p];
       for (std::size_t i = 0; i < point.observations.size(); ++i) {
         const Observation& o = point.observations[i];
-        const Pose& pose = poses_.at(o.keyframe);
-        geometry::PoseParameters parameters;
-        std::copy(pose.rotation, pose.rotation + 4, parameters.rotation);
-        std::copy(pose.translation, pose.translation + 3, parameters.translation);
-        const double chi2 = geometry::SquaredReprojectionError(
-            camera_, parameters.ToTransform(), point.position, o.u, o.v, o.u_right, sigma_);
+        const double chi2 =
+            geometry::SquaredReprojectionError(camera_, poses_.at(o.keyframe).CameraFromMap(),
+                                               point.position, o.u, o.v, o.u_right, sigma_);
         if (!(chi2 <
               (o.u_right >= 0 ? geometry::kChiSquare95ThreeDof : geometry::kChiSquare95TwoDof))) {
           rejected.insert({p, i});
@@ -222,14 +219,16 @@ GlobalRefinementSummary GlobalRefinement::Solve() {
   return result;
 }
 
+Eigen::Isometry3d GlobalRefinement::Pose::CameraFromMap() const {
+  geometry::PoseParameters parameters;
+  std::copy(rotation, rotation + 4, parameters.rotation);
+  std::copy(translation, translation + 3, parameters.translation);
+  return parameters.ToTransform();
+}
+
 std::map<std::int64_t, Eigen::Isometry3d> GlobalRefinement::Poses() const {
   std::map<std::int64_t, Eigen::Isometry3d> poses;
-  for (const auto& [id, pose] : poses_) {
-    geometry::PoseParameters parameters;
-    std::copy(pose.rotation, pose.rotation + 4, parameters.rotation);
-    std::copy(pose.translation, pose.translation + 3, parameters.translation);
-    poses[id] = parameters.ToTransform().inverse();
-  }
+  for (const auto& [id, pose] : poses_) poses[id] = pose.CameraFromMap().inverse();
   return poses;
 }
 

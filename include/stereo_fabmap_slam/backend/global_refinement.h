@@ -58,6 +58,8 @@ class GlobalRefinement {
     double rotation[4];  // T_camera_map as an Eigen quaternion (x, y, z, w)
     double translation[3];
     bool fixed;
+
+    Eigen::Isometry3d CameraFromMap() const;  // T_camera_map
   };
   struct Point {
     Eigen::Vector3d position;
