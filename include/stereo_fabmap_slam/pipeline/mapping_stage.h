@@ -123,8 +123,9 @@ class MappingStage : public MapState {
   // Bundle adjustment of the whole map in the map frame (backend::GlobalRefinement): the
   // keyframes joined to the map's first (which stays fixed, as does any keyframe of a loaded map,
   // whose points are not kept), the points the bundle adjustment keeps, moved into the map frame
-  // with the keyframe that saw them first, and the graph's edges. The refined poses become the
-  // graph's map poses. Nothing to do (an empty summary) before the first keyframe.
+  // with the keyframe that saw them first, and the graph's edges. The graph adopts the result
+  // (PoseGraph::AdoptRefinement). Nothing to do (an empty summary) while the map has no loop or
+  // relocalization edge: the windowed bundle adjustment has refined the odometry already.
   backend::GlobalRefinementSummary RefineGlobally(const backend::GlobalRefinementOptions& options);
   // The refinement's options; with options.after_loop_closing the stage refines the whole map
   // after every optimisation of the whole pose graph (in its time: pose_graph_ms).
