@@ -85,6 +85,8 @@ void GlobalRefinementOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("rounds", &rounds);
   visitor.Visit("odometry_edge_below_shared_points", &odometry_edge_below_shared_points);
   visitor.Visit("loop_information_scale", &loop_information_scale);
+  visitor.Visit("fuse_loop_points", &fuse_loop_points);
+  visitor.Visit("fuse_max_distance", &fuse_max_distance);
   visitor.Visit("threads", &threads);
 }
 
@@ -94,6 +96,9 @@ void GlobalRefinementOptions::Validate() const {
   }
   if (odometry_edge_below_shared_points < 0) {
     throw std::invalid_argument("global_refinement.odometry_edge_below_shared_points must be >= 0");
+  }
+  if (!(fuse_max_distance > 0)) {
+    throw std::invalid_argument("global_refinement.fuse_max_distance must be > 0");
   }
   if (!(loop_information_scale > 0)) {
     throw std::invalid_argument("global_refinement.loop_information_scale must be > 0");

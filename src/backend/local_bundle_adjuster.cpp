@@ -211,12 +211,10 @@ std::map<std::int64_t, Eigen::Isometry3d> LocalBundleAdjuster::KeyframePoses() c
   return poses;
 }
 
-void LocalBundleAdjuster::ForEachSharedPoint(
-    const std::function<void(const Eigen::Vector3d&, const std::vector<Observation>&)>& visit)
-    const {
-  for (const auto& [id, point] : points_) {
-    if (point.observations.size() >= 2) visit(point.position, point.observations);
-  }
+void LocalBundleAdjuster::ForEachPoint(
+    const std::function<void(std::int64_t, const Eigen::Vector3d&,
+                             const std::vector<Observation>&)>& visit) const {
+  for (const auto& [id, point] : points_) visit(id, point.position, point.observations);
 }
 
 }  // namespace stereo_fabmap_slam::backend

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "stereo_fabmap_slam/io/input_error.h"
 
@@ -220,6 +222,12 @@ bool MappingStage::AddReadyEdges() {
     try {
       graph_.AddLoop(edge.edge, edge.type);
       added = true;
+      // Kept only for a refinement that will fuse them (16 bytes a pair, ~100 pairs a loop).
+      const backend::GlobalRefinementOptions& refinement = global_refinement_options_;
+      if (refinement.fuse_loop_points && (refinement.after_loop_closing || refinement.at_end)) {
+        loop_shared_points_.insert(loop_shared_points_.end(), edge.edge.shared_points.begin(),
+                                   edge.edge.shared_points.end());
+      }
     } catch (const std::invalid_argument& error) {
       refused_edges_.push_back("edge " + std::to_string(edge.edge.query_id) + " -> " +
                                std::to_string(edge.edge.match_id) + " refused: " + error.what());
@@ -277,16 +285,66 @@ backend::GlobalRefinementSummary MappingStage::RefineGlobally(
     refinement.AddKeyframe(id, pose, id == anchor || !has_points);
     if (has_points) corrections[id] = pose * odometry_pose->second.inverse();
   }
-  bundle_adjuster_->ForEachSharedPoint(
-      [&](const Eigen::Vector3d& point_odom,
-          const std::vector<backend::PointObservation>& observations) {
-        for (const backend::PointObservation& o : observations) {
-          const auto correction = corrections.find(o.keyframe);
-          if (correction == corrections.end()) continue;
-          refinement.AddPoint(correction->second * point_odom, observations);
-          return;
-        }
-      });
+  // The map points verified as one place on two passes (loops' shared points) are one point:
+  // each group of them (union-find over the pairs) takes all their observations.
+  std::unordered_map<std::int64_t, std::int64_t> parent;
+  const std::function<std::int64_t(std::int64_t)> root = [&](std::int64_t id) {
+    auto it = parent.find(id);
+    if (it == parent.end() || it->second == id) return id;
+    const std::int64_t top = root(it->second);
+    it->second = top;
+    return top;
+  };
+  if (options.fuse_loop_points) {
+    // Where each point is in the map (by its first observer in the problem): a pair whose two
+    // points lie further apart than the refinement allows is a wrong match, not fused.
+    std::unordered_map<std::int64_t, Eigen::Vector3d> position;
+    bundle_adjuster_->ForEachPoint(
+        [&](std::int64_t id, const Eigen::Vector3d& point_odom,
+            const std::vector<backend::PointObservation>& observations) {
+          for (const backend::PointObservation& o : observations) {
+            const auto correction = corrections.find(o.keyframe);
+            if (correction == corrections.end()) continue;
+            position.emplace(id, correction->second * point_odom);
+            return;
+          }
+        });
+    for (const auto& [a, b] : loop_shared_points_) {
+      const auto position_a = position.find(a), position_b = position.find(b);
+      if (position_a == position.end() || position_b == position.end() ||
+          (position_a->second - position_b->second).norm() > options.fuse_max_distance) {
+        continue;
+      }
+      parent.try_emplace(a, a);
+      parent.try_emplace(b, b);
+      const std::int64_t root_a = root(a), root_b = root(b);
+      if (root_a != root_b) parent[std::max(root_a, root_b)] = std::min(root_a, root_b);
+    }
+  }
+  struct FusedPoint {
+    std::optional<Eigen::Vector3d> position;  // map frame, by its first observer in the problem
+    std::vector<backend::PointObservation> observations;
+  };
+  std::map<std::int64_t, FusedPoint> fused;  // by the group's root id
+  bundle_adjuster_->ForEachPoint([&](std::int64_t id, const Eigen::Vector3d& point_odom,
+                                     const std::vector<backend::PointObservation>& observations) {
+    const bool in_group = parent.count(id) > 0;
+    if (observations.size() < 2 && !in_group) return;
+    FusedPoint& point = fused[in_group ? root(id) : id];
+    for (const backend::PointObservation& o : observations) {
+      const auto correction = corrections.find(o.keyframe);
+      if (correction == corrections.end()) continue;
+      if (!point.position) point.position = correction->second * point_odom;
+      // A keyframe sees a place once: a second key point of it in the same group is dropped.
+      const bool seen = std::any_of(
+          point.observations.begin(), point.observations.end(),
+          [&](const backend::PointObservation& other) { return other.keyframe == o.keyframe; });
+      if (!seen) point.observations.push_back(o);
+    }
+  });
+  for (const auto& [id, point] : fused) {
+    if (point.position) refinement.AddPoint(*point.position, point.observations);
+  }
   for (const backend::PoseGraphEdge& edge : graph_.Edges()) refinement.AddEdge(edge);
   const backend::GlobalRefinementSummary summary = refinement.Solve();
   graph_.AdoptRefinement(refinement.Poses());

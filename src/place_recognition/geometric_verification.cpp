@@ -30,10 +30,11 @@ ViewVerification GeometricVerifier::Verify(const features::StereoFeatures& view,
     result.reason = "too few key points";
     return result;
   }
-  geometry::PointMatches matched = geometry::MatchedPoints(
-      view.keypoints, view.u_right, view.points, points,
+  std::vector<cv::DMatch> matches =
       features::RatioTestMatches(view.descriptors, point_descriptors, descriptor_norm_,
-                                 max_descriptor_distance_, thresholds.match_ratio));
+                                 max_descriptor_distance_, thresholds.match_ratio);
+  geometry::PointMatches matched =
+      geometry::MatchedPoints(view.keypoints, view.u_right, view.points, points, matches);
   result.matches = static_cast<int>(matched.correspondences.size());
   if (result.matches < thresholds.min_inliers) {
     result.reason = "only " + std::to_string(result.matches) + " descriptor matches";
@@ -56,6 +57,7 @@ ViewVerification GeometricVerifier::Verify(const features::StereoFeatures& view,
   std::vector<bool> initial(matched.correspondences.size(), false);
   for (const int i : ransac.inliers) initial[static_cast<std::size_t>(i)] = true;
   result.observations = std::move(matched.observations);
+  result.matched = std::move(matches);
   result.refined = geometry::RefinePose(result.observations, camera_, ransac.T_camera_world,
                                         geometry::PoseRefinementOptions(), &initial);
   result.inliers = result.refined.inliers;

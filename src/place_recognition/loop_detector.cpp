@@ -343,6 +343,19 @@ LoopCandidate LoopDetector::Verify(const map::StoredKeyframe& query,
   result.edge.match_id = candidate.keyframe.id;
   result.edge.T_match_query = T_candidate_query;
   result.edge.inliers = verified.inliers;
+  for (std::size_t k = 0; k < verified.matched.size(); ++k) {
+    if (!verified.refined.inlier[k]) continue;
+    const auto query_key_point = static_cast<std::size_t>(verified.matched[k].queryIdx);
+    const auto candidate_key_point = static_cast<std::size_t>(
+        candidate_rows[static_cast<std::size_t>(verified.matched[k].trainIdx)]);
+    const std::vector<std::int64_t>& query_ids = query.keyframe.map_point_ids;
+    const std::vector<std::int64_t>& candidate_ids = candidate.keyframe.map_point_ids;
+    if (query_key_point < query_ids.size() && candidate_key_point < candidate_ids.size() &&
+        query_ids[query_key_point] >= 0 && candidate_ids[candidate_key_point] >= 0) {
+      result.edge.shared_points.emplace_back(query_ids[query_key_point],
+                                             candidate_ids[candidate_key_point]);
+    }
+  }
   result.edge.information =
       geometry::DiagonalPoseInformation(options_.translation_sigma, options_.rotation_sigma_deg);
   return result;

@@ -1,5 +1,6 @@
 #include "ros_conversions.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -264,6 +265,10 @@ stereo_fabmap_slam::LoopEdge ToLoopEdgeMessage(const map::LoopEdge& edge) {
     for (int c = 0; c < 6; ++c) message.information[r * 6 + c] = edge.information(r, c);
   }
   message.inliers = edge.inliers;
+  for (const auto& [query_point, match_point] : edge.shared_points) {
+    message.shared_query_points.push_back(query_point);
+    message.shared_match_points.push_back(match_point);
+  }
   message.probability = edge.probability;
   return message;
 }
@@ -277,6 +282,12 @@ map::LoopEdge FromLoopEdgeMessage(const stereo_fabmap_slam::LoopEdge& message) {
     for (int c = 0; c < 6; ++c) edge.information(r, c) = message.information[r * 6 + c];
   }
   edge.inliers = message.inliers;
+  // Pairs: a message whose two lists differ in length gives the pairs both have.
+  const std::size_t pairs =
+      std::min(message.shared_query_points.size(), message.shared_match_points.size());
+  for (std::size_t i = 0; i < pairs; ++i) {
+    edge.shared_points.emplace_back(message.shared_query_points[i], message.shared_match_points[i]);
+  }
   edge.probability = message.probability;
   return edge;
 }

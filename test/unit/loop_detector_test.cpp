@@ -94,14 +94,31 @@ StereoWorld PosterWorld() {
   return world;
 }
 
+// The keyframe's map point ids: each key point's world point (the nearest to where its stereo
+// point puts it, seen from `true_pose`) plus `offset` (a second pass makes new points).
+void NameMapPoints(const StereoWorld& world, const Eigen::Isometry3d& true_pose,
+                   std::int64_t offset, map::Keyframe* keyframe) {
+  for (std::size_t k = 0; k < keyframe->map_point_ids.size(); ++k) {
+    const Eigen::Vector3d point = true_pose * keyframe->features.points[k];
+    std::size_t nearest = 0;
+    for (std::size_t i = 1; i < world.points.size(); ++i) {
+      if ((world.points[i] - point).norm() < (world.points[nearest] - point).norm()) nearest = i;
+    }
+    keyframe->map_point_ids[k] = offset + static_cast<std::int64_t>(nearest);
+  }
+}
+
 TEST(LoopDetector, TrueRevisitIsAcceptedWithItsRelativePose) {
   const StereoWorld world = PosterWorld();
   place_recognition::LoopDetector detector = MakeDetector();
-  detector.Process(MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0)));
+  map::Keyframe first_view = MakeKeyframe(0, 0.0, world, At(0, 0, 0), At(0, 0, 0));
+  NameMapPoints(world, At(0, 0, 0), 0, &first_view);
+  detector.Process(first_view);
   detector.Process(MakeKeyframe(1, 10.0, world, At(20, 0, 0), At(20, 0, 0)));
   // Back at A, 10 cm beside the first view; the odometry has drifted 15 cm over the 40 m.
-  const LoopDetection detection =
-      detector.Process(MakeKeyframe(2, 20.0, world, At(0.1, 0, 0), At(0.25, 0, 0)));
+  map::Keyframe revisit = MakeKeyframe(2, 20.0, world, At(0.1, 0, 0), At(0.25, 0, 0));
+  NameMapPoints(world, At(0.1, 0, 0), 10000, &revisit);
+  const LoopDetection detection = detector.Process(revisit);
   const LoopCandidate* a = CandidateFor(detection, 0);
   ASSERT_NE(a, nullptr);
   EXPECT_TRUE(a->accepted) << a->reason;
@@ -112,6 +129,13 @@ TEST(LoopDetector, TrueRevisitIsAcceptedWithItsRelativePose) {
   EXPECT_LT((detection.loop->T_match_query.translation() - Eigen::Vector3d(0.1, 0, 0)).norm(),
             1e-3);
   EXPECT_GE(detection.loop->inliers, 200);
+  // Every inlier is a map point in both keyframes here: each pair is one world point, named on
+  // the second pass (10000 + i) and on the first (i).
+  EXPECT_EQ(detection.loop->shared_points.size(),
+            static_cast<std::size_t>(detection.loop->inliers));
+  for (const auto& [query_point, match_point] : detection.loop->shared_points) {
+    EXPECT_EQ(query_point, match_point + 10000);
+  }
 }
 
 // Two earlier views of A, both good loops (and B, whose posters make it a candidate that fails):

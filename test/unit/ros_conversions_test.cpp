@@ -182,8 +182,10 @@ TEST(RosConversions, LoopEdgeRoundTrip) {
     for (int c = 0; c < 6; ++c) edge.information(r, c) = r == c ? 100.0 + r : 0.5 * (r + c);
   }
   edge.inliers = 87;
+  edge.shared_points = {{1201, 35}, {1202, 36}, {1250, 90}};
   edge.probability = 0.93;
   const map::LoopEdge back = FromLoopEdgeMessage(ToLoopEdgeMessage(edge));
+  EXPECT_EQ(back.shared_points, edge.shared_points);
   EXPECT_EQ(back.query_id, 120);
   EXPECT_EQ(back.match_id, 7);
   EXPECT_TRUE(back.T_match_query.isApprox(edge.T_match_query, 1e-12));

@@ -44,10 +44,10 @@ class LocalBundleAdjuster {
   // Latest pose (T_world_camera) of every keyframe so far, by id.
   std::map<std::int64_t, Eigen::Isometry3d> KeyframePoses() const;
 
-  // Every point seen by two keyframes or more (what informs poses), with its position (odom
-  // frame) and observations: what a refinement of the whole map needs.
-  void ForEachSharedPoint(const std::function<void(const Eigen::Vector3d&,
-                                                   const std::vector<Observation>&)>& visit) const;
+  // Every point kept, with its id, position (odom frame) and observations: what a refinement of
+  // the whole map needs.
+  void ForEachPoint(const std::function<void(std::int64_t, const Eigen::Vector3d&,
+                                             const std::vector<Observation>&)>& visit) const;
 
  private:
   struct Point {

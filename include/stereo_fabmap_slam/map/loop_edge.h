@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -17,7 +19,10 @@ struct LoopEdge {
   // Inverse covariance of the relative pose, in the order (translation x y z, rotation x y z as
   // a small-angle vector) of the pose graph's residual.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
-  int inliers = 0;         // verified 2-D/3-D matches
+  int inliers = 0;  // verified 2-D/3-D matches
+  // The inliers whose key points are map points in both keyframes: (the query's map point, the
+  // match's), the same place seen on both passes (a refinement of the whole map fuses them).
+  std::vector<std::pair<std::int64_t, std::int64_t>> shared_points;
   double probability = 0;  // FAB-MAP's posterior of the match place
 };
 

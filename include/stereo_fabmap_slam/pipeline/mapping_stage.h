@@ -128,7 +128,9 @@ class MappingStage : public MapState {
   // relocalization edge: the windowed bundle adjustment has refined the odometry already.
   backend::GlobalRefinementSummary RefineGlobally(const backend::GlobalRefinementOptions& options);
   // The refinement's options; with options.after_loop_closing the stage refines the whole map
-  // after every optimisation of the whole pose graph (in its time: pose_graph_ms).
+  // after every optimisation of the whole pose graph (in its time: pose_graph_ms). With
+  // after_loop_closing or at_end (a driver's refinement at the end) and fuse_loop_points, the
+  // stage keeps the loops' shared points for it; a refinement asked for otherwise fuses none.
   void SetGlobalRefinement(const backend::GlobalRefinementOptions& options);
   std::uint64_t global_refinements() const { return global_refinements_; }
 
@@ -208,6 +210,9 @@ class MappingStage : public MapState {
   std::uint64_t optimisations_ = 0;
   backend::PoseGraphSummary last_optimisation_;
   backend::GlobalRefinementOptions global_refinement_options_;
+  // The map points the graph's loops verified as one place on two passes (query's, match's),
+  // kept when the refinement options ask for a refinement that fuses them.
+  std::vector<std::pair<std::int64_t, std::int64_t>> loop_shared_points_;
   std::uint64_t global_refinements_ = 0;
 };
 

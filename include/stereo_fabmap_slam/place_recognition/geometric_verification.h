@@ -46,6 +46,8 @@ struct ViewVerification {
   // The matched points as the refinement saw them, and its result: T_camera_world is the
   // points' frame in the view's camera frame (meaningful from kRefinementFailed on).
   std::vector<geometry::PoseObservation> observations;
+  // Which key point of the view (queryIdx) and which point (trainIdx) each observation is.
+  std::vector<cv::DMatch> matched;
   geometry::PoseRefinement refined;
 
   bool passed() const { return stage == VerificationStage::kPassed; }
