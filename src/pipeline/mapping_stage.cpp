@@ -268,9 +268,11 @@ void MappingStage::SetMode(SlamMode mode) {
 
 backend::GlobalRefinementSummary MappingStage::RefineGlobally(
     const backend::GlobalRefinementOptions& options) {
-  // Without a loop there is nothing the windowed bundle adjustment has not refined already.
-  if (!bundle_adjuster_ || !camera_ || LoopEdges().empty()) return {};
-  ++global_refinements_;
+  // Without a loop there is nothing the windowed bundle adjustment has not refined already; in
+  // localization mode the map stays as it is.
+  if (!bundle_adjuster_ || !camera_ || LoopEdges().empty() || mode_ == SlamMode::kLocalization) {
+    return {};
+  }
   backend::GlobalRefinement refinement(options, pose_graph_options_, *camera_,
                                        bundle_adjustment_options_.sigma);
   const std::map<std::int64_t, Eigen::Isometry3d> odometry = bundle_adjuster_->KeyframePoses();
@@ -299,16 +301,15 @@ backend::GlobalRefinementSummary MappingStage::RefineGlobally(
     // Where each point is in the map (by its first observer in the problem): a pair whose two
     // points lie further apart than the refinement allows is a wrong match, not fused.
     std::unordered_map<std::int64_t, Eigen::Vector3d> position;
-    bundle_adjuster_->ForEachPoint(
-        [&](std::int64_t id, const Eigen::Vector3d& point_odom,
-            const std::vector<backend::PointObservation>& observations) {
-          for (const backend::PointObservation& o : observations) {
-            const auto correction = corrections.find(o.keyframe);
-            if (correction == corrections.end()) continue;
-            position.emplace(id, correction->second * point_odom);
-            return;
-          }
-        });
+    bundle_adjuster_->ForEachPoint([&](std::int64_t id, const Eigen::Vector3d& point_odom,
+                                       const std::vector<backend::PointObservation>& observations) {
+      for (const backend::PointObservation& o : observations) {
+        const auto correction = corrections.find(o.keyframe);
+        if (correction == corrections.end()) continue;
+        position.emplace(id, correction->second * point_odom);
+        return;
+      }
+    });
     for (const auto& [a, b] : loop_shared_points_) {
       const auto position_a = position.find(a), position_b = position.find(b);
       if (position_a == position.end() || position_b == position.end() ||
@@ -318,7 +319,14 @@ backend::GlobalRefinementSummary MappingStage::RefineGlobally(
       parent.try_emplace(a, a);
       parent.try_emplace(b, b);
       const std::int64_t root_a = root(a), root_b = root(b);
-      if (root_a != root_b) parent[std::max(root_a, root_b)] = std::min(root_a, root_b);
+      // Pairs within reach can still chain look-alikes into one group across a corridor: two
+      // groups join only if their roots are within reach too, so that every point of a group
+      // lies within fuse_max_distance of its root.
+      if (root_a == root_b ||
+          (position.at(root_a) - position.at(root_b)).norm() > options.fuse_max_distance) {
+        continue;
+      }
+      parent[std::max(root_a, root_b)] = std::min(root_a, root_b);
     }
   }
   struct FusedPoint {
@@ -347,6 +355,9 @@ backend::GlobalRefinementSummary MappingStage::RefineGlobally(
   }
   for (const backend::PoseGraphEdge& edge : graph_.Edges()) refinement.AddEdge(edge);
   const backend::GlobalRefinementSummary summary = refinement.Solve();
+  // Every keyframe fixed (a loaded map with nothing new): nothing moved, no steps to adopt.
+  if (summary.keyframes == 0) return summary;
+  ++global_refinements_;
   graph_.AdoptRefinement(refinement.Poses());
   return summary;
 }
@@ -359,6 +370,7 @@ void MappingStage::Load(const map::SavedMap& saved) {
   backend::PoseGraph graph = RestorePoseGraph(saved, pose_graph_options_);
   graph_ = std::move(graph);
   waiting_edges_.clear();
+  loop_shared_points_.clear();  // their points went with the bundle adjuster
   bundle_adjuster_.reset();
   camera_ = saved.camera;  // keyframes of another camera are refused from now on
   localization_correction_.reset();

@@ -6,6 +6,7 @@
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 
 #include <algorithm>
+#include <functional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -64,6 +65,47 @@ class MappingStageTest : public ::testing::Test {
     edge.T_match_query = Eigen::Isometry3d(Eigen::Translation3d(dx, 0, 0));
     edge.information = geometry::DiagonalPoseInformation(0.02, 0.2);
     return edge;
+  }
+
+  // A second pass: keyframes 6-8 stand where 0-2 stood, but the odometry puts them 5 cm further
+  // along x, and they name the same 300 points anew (1000 + i). The loop 6 -> 0 (exact, 2 cm
+  // sigma) carries the pairs of points its verification matched (`pair_of`: the first pass's point
+  // a second pass's point i was matched to, or -1 for none). Returns how far the second pass's
+  // keyframes end from their true places after the refinement.
+  struct SecondPassErrors {
+    double revisit;  // keyframe 6 [m]; its true place is the origin
+    double largest;  // of keyframes 6-8
+  };
+  SecondPassErrors SecondPassErrorsAfterRefinement(
+      const backend::GlobalRefinementOptions& options,
+      const std::function<std::int64_t(std::int64_t)>& pair_of) const {
+    const auto second_pass = [this](std::int64_t id) {
+      map::Keyframe keyframe = SharedPointsKeyframe(id - 6);
+      keyframe.id = id;
+      keyframe.timestamp = 0.5 * id;
+      keyframe.T_world_camera.translation().x() += 0.05;
+      for (std::int64_t& point : keyframe.map_point_ids) point += 1000;
+      return keyframe;
+    };
+    pipeline::MappingStage stage(backend::BundleAdjustmentOptions(), backend::PoseGraphOptions(),
+                                 [] { return 0.0; });
+    stage.SetGlobalRefinement(options);
+    for (std::int64_t id = 0; id < 6; ++id)
+      stage.AddKeyframe(SharedPointsKeyframe(id), kTestCamera);
+    for (std::int64_t id = 6; id < 9; ++id) stage.AddKeyframe(second_pass(id), kTestCamera);
+    map::LoopEdge loop = Edge(0, 6, 0.0);
+    for (const std::int64_t point : second_pass(6).map_point_ids) {
+      const std::int64_t match = pair_of(point - 1000);
+      if (match >= 0) loop.shared_points.emplace_back(point, match);
+    }
+    stage.AddEdge(loop, backend::PoseGraphEdgeType::kLoop);
+    EXPECT_EQ(stage.global_refinements(), 1u);
+    SecondPassErrors errors{stage.MapPose(6).translation().norm(), 0.0};
+    for (std::int64_t id = 6; id < 9; ++id) {
+      const Eigen::Vector3d truth = SharedPointsKeyframe(id - 6).T_world_camera.translation();
+      errors.largest = std::max(errors.largest, (stage.MapPose(id).translation() - truth).norm());
+    }
+    return errors;
   }
 
   StereoWorld world_;
@@ -143,46 +185,68 @@ TEST_F(MappingStageTest, AfterALoopClosesTheWholeMapIsRefinedWhenAsked) {
   EXPECT_TRUE(refining.MapPose(0).isApprox(stage_.MapPose(0), 1e-12));
 }
 
-// A second pass: keyframes 6-8 stand where 0-2 stood, but the odometry puts them 5 cm further
-// along x, and they name the same 300 points anew (1000 + i). The loop 6 -> 0 (exact, 2 cm
-// sigma) carries the pairs of points its verification matched. Without fusing them the two
-// passes are joined by the loop and the odometry step 5 -> 6 (no point is shared across it),
-// which disagree by 5 cm: keyframe 6 ends between them (6.4 mm from the truth: the loop's 2 cm
-// against the step's 2 cm and 0.1 degrees, under the loop's Cauchy loss). With the points fused,
-// the first pass's exact observations put it back to the truth (to well under a millimetre).
+// Without fusing the shared points the two passes are joined by the loop and the odometry step
+// 5 -> 6 (no point is shared across it), which disagree by 5 cm: keyframe 6 ends between them
+// (6.4 mm from the truth: the loop's 2 cm against the step's 2 cm and 0.1 degrees, under the
+// loop's Cauchy loss). With the points fused, the first pass's exact observations put it back to
+// the truth (to well under a millimetre).
 TEST_F(MappingStageTest, ARefinementFusesThePointsALoopSawOnBothPasses) {
-  const auto second_pass = [this](std::int64_t id) {
-    map::Keyframe keyframe = SharedPointsKeyframe(id - 6);
-    keyframe.id = id;
-    keyframe.timestamp = 0.5 * id;
-    keyframe.T_world_camera.translation().x() += 0.05;
-    for (std::int64_t& point : keyframe.map_point_ids) point += 1000;
-    return keyframe;
-  };
   backend::GlobalRefinementOptions fused, separate;
   fused.after_loop_closing = separate.after_loop_closing = true;
   separate.fuse_loop_points = false;
-  double error[2];
-  for (const bool fuse : {true, false}) {
-    pipeline::MappingStage stage(backend::BundleAdjustmentOptions(), backend::PoseGraphOptions(),
-                                 [] { return 0.0; });
-    stage.SetGlobalRefinement(fuse ? fused : separate);
-    for (std::int64_t id = 0; id < 6; ++id)
-      stage.AddKeyframe(SharedPointsKeyframe(id), kTestCamera);
-    for (std::int64_t id = 6; id < 9; ++id) stage.AddKeyframe(second_pass(id), kTestCamera);
-    map::LoopEdge loop = Edge(0, 6, 0.0);
-    const map::Keyframe revisit = second_pass(6);
-    for (const std::int64_t point : revisit.map_point_ids) {
-      loop.shared_points.emplace_back(point, point - 1000);
+  const auto same_point = [](std::int64_t point) { return point; };
+  const double fused_error = SecondPassErrorsAfterRefinement(fused, same_point).revisit;
+  const double separate_error = SecondPassErrorsAfterRefinement(separate, same_point).revisit;
+  RecordProperty("fused_error_mm", std::to_string(fused_error * 1000));
+  RecordProperty("separate_error_mm", std::to_string(separate_error * 1000));
+  EXPECT_LT(fused_error, 0.0005);
+  EXPECT_GT(separate_error, 0.003);
+}
+
+// Look-alikes: each second-pass point paired with a first-pass point more than half a metre from
+// it (the next door of a corridor). With the distance check none is fused, and the second pass
+// ends where it ends without fusing (to 0.1 mm: the same problem). With the check off they are
+// fused: the outlier test then takes the second pass's observations of its fused points out,
+// which are all it had, and keyframes 7 and 8, held by nothing, end metres away (14.5 m here).
+TEST_F(MappingStageTest, LoopPointsFarApartInTheMapAreNotFused) {
+  const auto look_alike = [this](std::int64_t point) -> std::int64_t {
+    for (std::size_t other = 0; other < world_.points.size(); ++other) {
+      const std::size_t candidate =
+          (static_cast<std::size_t>(point) + 1 + other) % world_.points.size();
+      if ((world_.points[candidate] - world_.points[static_cast<std::size_t>(point)]).norm() > 0.5)
+        return static_cast<std::int64_t>(candidate);
     }
-    stage.AddEdge(loop, backend::PoseGraphEdgeType::kLoop);
-    EXPECT_EQ(stage.global_refinements(), 1u);
-    error[fuse ? 0 : 1] = stage.MapPose(6).translation().norm();  // the truth: the origin
-  }
-  RecordProperty("fused_error_mm", std::to_string(error[0] * 1000));
-  RecordProperty("separate_error_mm", std::to_string(error[1] * 1000));
-  EXPECT_LT(error[0], 0.0005);
-  EXPECT_GT(error[1], 0.003);
+    return -1;
+  };
+  backend::GlobalRefinementOptions checked, unchecked, separate;
+  checked.after_loop_closing = unchecked.after_loop_closing = separate.after_loop_closing = true;
+  unchecked.fuse_max_distance = 1e9;
+  separate.fuse_loop_points = false;
+  const auto same_point = [](std::int64_t point) { return point; };
+  const double checked_error = SecondPassErrorsAfterRefinement(checked, look_alike).largest;
+  const double unchecked_error = SecondPassErrorsAfterRefinement(unchecked, look_alike).largest;
+  const double separate_error = SecondPassErrorsAfterRefinement(separate, same_point).largest;
+  RecordProperty("checked_error_mm", std::to_string(checked_error * 1000));
+  RecordProperty("unchecked_error_mm", std::to_string(unchecked_error * 1000));
+  EXPECT_NEAR(checked_error, separate_error, 1e-4);
+  EXPECT_GT(unchecked_error, 1.0);
+}
+
+// In localization mode the map stays as it is: no refinement, even with loops in the graph.
+TEST_F(MappingStageTest, LocalizationModeRefinesNothing) {
+  backend::GlobalRefinementOptions options;
+  pipeline::MappingStage stage(backend::BundleAdjustmentOptions(), backend::PoseGraphOptions(),
+                               [] { return 0.0; });
+  for (std::int64_t id = 0; id < 6; ++id) stage.AddKeyframe(SharedPointsKeyframe(id), kTestCamera);
+  stage.AddEdge(Edge(0, 5, 0.53), backend::PoseGraphEdgeType::kLoop);
+  const Eigen::Isometry3d before = stage.MapPose(5);
+  stage.SetMode(pipeline::SlamMode::kLocalization);
+  EXPECT_EQ(stage.RefineGlobally(options).keyframes, 0u);
+  EXPECT_EQ(stage.global_refinements(), 0u);
+  EXPECT_TRUE(stage.MapPose(5).isApprox(before, 1e-12));
+  stage.SetMode(pipeline::SlamMode::kMapping);
+  EXPECT_GT(stage.RefineGlobally(options).keyframes, 0u);
+  EXPECT_EQ(stage.global_refinements(), 1u);
 }
 
 TEST_F(MappingStageTest, AnEdgeWaitsForItsKeyframesThenJoinsTheSegments) {

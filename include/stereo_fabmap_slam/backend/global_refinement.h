@@ -30,7 +30,8 @@ struct GlobalRefinementSummary {
 // The pose graph summarises each step between keyframes by one relative pose with a fixed
 // uncertainty; here the steps are what the points say they are, so a step measured on many
 // points is stiff and one measured on few gives way. Points join only keyframes that saw them
-// (they are not fused across loops), so the graph's other edges join the problem too: loops and
+// (across a loop only where the caller fused a loop's shared points into one point), so the
+// graph's other edges join the problem too: loops and
 // relocalizations (with the pose graph's Cauchy loss: a wrong one that survived far off barely
 // pulls), and the odometry edges of steps that share too few points to hold them (a tracking
 // loss's gap shares none). The keyframes marked fixed are the gauge.

@@ -125,7 +125,9 @@ class MappingStage : public MapState {
   // whose points are not kept), the points the bundle adjustment keeps, moved into the map frame
   // with the keyframe that saw them first, and the graph's edges. The graph adopts the result
   // (PoseGraph::AdoptRefinement). Nothing to do (an empty summary) while the map has no loop or
-  // relocalization edge: the windowed bundle adjustment has refined the odometry already.
+  // relocalization edge (the windowed bundle adjustment has refined the odometry already), in
+  // localization mode (the map stays as it is), or when every keyframe is fixed.
+  // global_refinements() counts the refinements that moved keyframes.
   backend::GlobalRefinementSummary RefineGlobally(const backend::GlobalRefinementOptions& options);
   // The refinement's options; with options.after_loop_closing the stage refines the whole map
   // after every optimisation of the whole pose graph (in its time: pose_graph_ms). With
