@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <unordered_set>
@@ -34,6 +35,22 @@ o3c::Tensor BlockKeys(const std::vector<Eigen::Vector3i>& blocks) {
   return o3c::Tensor(flat, {static_cast<std::int64_t>(blocks.size()), 3}, o3c::Int32);
 }
 
+// The inverse variance of a stereo depth [1/m^2]: sigma_z = noise * z^2 / (f * b). Here, not a
+// member, so that the compiler inlines it into the voxel loop (a member of a shared library is
+// called through the PLT).
+inline double InverseDepthVariance(double depth, double disparity_noise, double focal_baseline) {
+  const double sigma = disparity_noise * depth * depth / focal_baseline;
+  return 1.0 / (sigma * sigma);
+}
+
+// std::lround(x) for |x| < 2^52, where x minus its truncation is exact, but inlined: std::lround
+// is a libm call through the PLT, once for every voxel updated.
+inline long RoundHalfAwayFromZero(double x) {
+  const long whole = static_cast<long>(x);
+  const double fraction = x - static_cast<double>(whole);
+  return whole + (fraction >= 0.5 ? 1 : 0) - (fraction <= -0.5 ? 1 : 0);
+}
+
 }  // namespace
 
 struct DepthFusion::Volume {
@@ -50,7 +67,8 @@ struct DepthFusion::Volume {
 struct DepthFusion::ViewData {
   const cv::Mat& grey;
   const cv::Mat& depth;
-  Eigen::Matrix3d R;  // world to camera
+  const float* depth_and_ray;  // per pixel, row by row: depth, then the ray's length per depth
+  Eigen::Matrix3d R;           // world to camera
   Eigen::Vector3d t;
   float* tsdf;
   float* weight;
@@ -84,11 +102,6 @@ void DepthFusion::Deintegrate(const cv::Mat& grey, const cv::Mat& depth,
                               const Eigen::Isometry3d& T_world_camera,
                               const std::vector<Eigen::Vector3i>& blocks) {
   Fuse(grey, depth, T_world_camera, &blocks);
-}
-
-double DepthFusion::Weight(double depth) const {
-  const double sigma = options_.disparity_noise * depth * depth / (camera_.fx * camera_.baseline);
-  return 1.0 / (sigma * sigma);
 }
 
 std::vector<Eigen::Vector3i> DepthFusion::BlocksNearSurface(
@@ -166,9 +179,22 @@ std::vector<Eigen::Vector3i> DepthFusion::Fuse(const cv::Mat& grey, const cv::Ma
     for (std::size_t i = 0; i < blocks->size(); ++i)
       if (is_found[i]) visible.emplace_back((*blocks)[i], index[i]);
   }
+  // Each voxel reads its pixel's depth and ray length: side by side, one cache line brings both
+  // (the voxel loop waits mostly on these reads).
+  depth_and_ray_.resize(2 * depth.total());
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* z = depth.ptr<float>(v);
+    const float* ray = ray_length_.ptr<float>(v);
+    float* out = depth_and_ray_.data() + 2 * static_cast<std::size_t>(v) * depth.cols;
+    for (int u = 0; u < depth.cols; ++u) {
+      out[2 * u] = z[u];
+      out[2 * u + 1] = ray[u];
+    }
+  }
   std::vector<o3c::Tensor> values = map.GetValueTensors();
   const ViewData view{grey,
                       depth,
+                      depth_and_ray_.data(),
                       T_camera_world.linear(),
                       T_camera_world.translation(),
                       values[0].GetDataPtr<float>(),
@@ -191,11 +217,16 @@ std::vector<Eigen::Vector3i> DepthFusion::Fuse(const cv::Mat& grey, const cv::Ma
 std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
     open3d::core::HashMap& map, const cv::Mat& depth,
     const Eigen::Isometry3d& T_camera_world) const {
-  // The farthest measured depth in every tile of kTile x kTile pixels (0 where none): a block is
-  // updated only if some pixel of its image footprint measured a surface no nearer than the
-  // block's front minus the band. Blocks behind every measurement or where nothing was measured
-  // are left as they are (on MH01_first10s most of the blocks in the view's frustum).
-  constexpr int kTile = 16;
+  // A block is updated only if some pixel of its voxels' image footprint measured a surface no
+  // nearer than its nearest voxel minus the band; any other block would come out of the voxel
+  // loop as it went in (each of its voxels projects to no depth, or to one more than the band in
+  // front of it), so leaving it out changes nothing but the time. The footprint: the box of the
+  // block's voxel centres projected (its corners bound it), rounded to the voxel loop's pixels;
+  // the deepest measurement in it is bounded by the farthest depth of every kTile x kTile tile
+  // it touches (0 where none). Most of the blocks in a view's frustum are left out so (on
+  // MH01_first10s with 16-pixel tiles and a sphere's footprint, half of those kept had no voxel
+  // to update).
+  constexpr int kTile = 8;
   const int tiles_x = (depth.cols + kTile - 1) / kTile, tiles_y = (depth.rows + kTile - 1) / kTile;
   cv::Mat farthest(tiles_y, tiles_x, CV_32F, cv::Scalar(0.0f));
   for (int v = 0; v < depth.rows; ++v) {
@@ -208,35 +239,93 @@ std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
   const o3c::Tensor keys = map.GetKeyTensor();
   const int* active_index = active.GetDataPtr<int>();
   const int* key = keys.GetDataPtr<int>();
-  const double unit = options_.voxel_size * options_.block_resolution;
+  const int resolution = options_.block_resolution;
+  const double unit = options_.voxel_size * resolution;
   const double half_diagonal = 0.5 * std::sqrt(3.0) * unit;
-  std::vector<std::pair<Eigen::Vector3i, int>> visible;
+  // The voxel centres of a block span (resolution - 1) voxels along each of its axes.
+  const Eigen::Matrix3d span = T_camera_world.linear() * options_.voxel_size * (resolution - 1);
+  // Each block with the tile of its footprint's centre (-1 for blocks the image plane cuts): in
+  // that order neighbouring blocks read the same rows of the depth image one after the other,
+  // from the cache, instead of in the hash map's order (the same result: each voxel is updated
+  // once).
+  struct Candidate {
+    int tile;
+    int buffer_index;
+    Eigen::Vector3i block;
+  };
+  std::vector<Candidate> candidates;
   for (std::int64_t i = 0; i < active.GetLength(); ++i) {
     const int buffer_index = active_index[i];
     const Eigen::Vector3i block(key[3 * buffer_index], key[3 * buffer_index + 1],
                                 key[3 * buffer_index + 2]);
+    // First the block's bounding sphere, cheap: most blocks of a large map are behind the
+    // camera or outside the image.
     const Eigen::Vector3d centre =
         T_camera_world * ((block.cast<double>().array() + 0.5) * unit).matrix();
-    const double front = centre.z() - half_diagonal;
-    if (centre.z() + half_diagonal <= 0) continue;  // behind the camera
-    if (front > 1e-3) {
-      // The block's footprint: its bounding sphere's image, a square around the centre's pixel.
-      const double radius = std::max(camera_.fx, camera_.fy) * half_diagonal / front;
-      const double u = camera_.fx * centre.x() / centre.z() + camera_.cx;
-      const double v = camera_.fy * centre.y() / centre.z() + camera_.cy;
-      const int u0 = std::max(0, static_cast<int>(std::floor(u - radius))) / kTile;
-      const int u1 = std::min(depth.cols - 1, static_cast<int>(std::ceil(u + radius))) / kTile;
-      const int v0 = std::max(0, static_cast<int>(std::floor(v - radius))) / kTile;
-      const int v1 = std::min(depth.rows - 1, static_cast<int>(std::ceil(v + radius))) / kTile;
-      if (u + radius < 0 || v + radius < 0 || u - radius >= depth.cols || v - radius >= depth.rows)
-        continue;  // outside the image
-      float deepest = 0.0f;
-      for (int ty = v0; ty <= v1; ++ty)
-        for (int tx = u0; tx <= u1; ++tx) deepest = std::max(deepest, farthest.at<float>(ty, tx));
-      if (front > deepest + options_.truncation) continue;  // nothing measured, or all in front
+    if (centre.z() + half_diagonal <= 1e-3) continue;  // the voxel loop skips every voxel
+    if (centre.z() - half_diagonal > 1e-3) {
+      // A point within r of the centre (x, y, z) projects within f r (z + |x|) / (z (z - r)) of
+      // the centre's projection along the rows (off the axis a sphere's image is wider than
+      // f r / (z - r)), and likewise along the columns; a pixel more for rounding.
+      const double z = centre.z(), scale = half_diagonal / (z * (z - half_diagonal));
+      const double radius_u = camera_.fx * scale * (z + std::abs(centre.x())) + 1;
+      const double radius_v = camera_.fy * scale * (z + std::abs(centre.y())) + 1;
+      const double u = camera_.fx * centre.x() / z + camera_.cx;
+      const double v = camera_.fy * centre.y() / z + camera_.cy;
+      if (u + radius_u < 0 || v + radius_v < 0 || u - radius_u >= depth.cols ||
+          v - radius_v >= depth.rows)
+        continue;
     }
-    visible.emplace_back(block, buffer_index);
+    const Eigen::Vector3d first = T_camera_world * (block.cast<double>() * unit);
+    Eigen::Vector3d corners[8];
+    double near = std::numeric_limits<double>::infinity(), far = -near;
+    for (int c = 0; c < 8; ++c) {
+      corners[c] = first + span.col(0) * (c & 1) + span.col(1) * ((c >> 1) & 1) +
+                   span.col(2) * ((c >> 2) & 1);
+      near = std::min(near, corners[c].z());
+      far = std::max(far, corners[c].z());
+    }
+    if (far <= 1e-3) continue;  // behind the camera: the voxel loop skips every voxel
+    int tile = -1;
+    if (near > 1e-3) {
+      // The voxel loop's pixel of a voxel is the floor of its projection plus a half.
+      double u_low = std::numeric_limits<double>::infinity(), u_high = -u_low;
+      double v_low = u_low, v_high = -u_low;
+      for (const Eigen::Vector3d& corner : corners) {
+        const double u = camera_.fx * corner.x() / corner.z() + camera_.cx + 0.5;
+        const double v = camera_.fy * corner.y() / corner.z() + camera_.cy + 0.5;
+        u_low = std::min(u_low, u);
+        u_high = std::max(u_high, u);
+        v_low = std::min(v_low, v);
+        v_high = std::max(v_high, v);
+      }
+      if (u_high < -1 || v_high < -1 || u_low >= depth.cols + 1 || v_low >= depth.rows + 1)
+        continue;  // outside the image
+      // A pixel more on every side: the voxel loop computes its projections another way, and
+      // one rounded across a pixel's edge must still be in the footprint.
+      const int u0 = static_cast<int>(std::max(u_low - 1, 0.0)) / kTile;
+      const int u1 = static_cast<int>(std::min(u_high + 1, depth.cols - 1.0)) / kTile;
+      const int v0 = static_cast<int>(std::max(v_low - 1, 0.0)) / kTile;
+      const int v1 = static_cast<int>(std::min(v_high + 1, depth.rows - 1.0)) / kTile;
+      float deepest = 0.0f;
+      for (int ty = v0; ty <= v1; ++ty) {
+        const float* tile_row = farthest.ptr<float>(ty);
+        for (int tx = u0; tx <= u1; ++tx) deepest = std::max(deepest, tile_row[tx]);
+      }
+      // Nothing measured, or everything more than the band in front of the nearest voxel (a
+      // micrometre of margin for the voxel loop's own rounding).
+      if (deepest + 1e-6 < near - options_.truncation) continue;
+      tile = ((v0 + v1) / 2) * tiles_x + (u0 + u1) / 2;
+    }
+    candidates.push_back({tile, buffer_index, block});
   }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.tile != b.tile ? a.tile < b.tile : a.buffer_index < b.buffer_index;
+  });
+  std::vector<std::pair<Eigen::Vector3i, int>> visible;
+  visible.reserve(candidates.size());
+  for (const Candidate& candidate : candidates)
+    visible.emplace_back(candidate.block, candidate.buffer_index);
   return visible;
 }
 
@@ -250,6 +339,8 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
   // its index within the block is x + resolution * (y + resolution * z).
   const Eigen::Vector3d origin = block.cast<double>() * resolution * voxel;
   const Eigen::Vector3d step = view.R.col(0) * voxel;
+  const int cols = view.depth.cols, rows = view.depth.rows;
+  const double focal_baseline = camera_.fx * camera_.baseline;
   for (int z = 0; z < resolution; ++z) {
     for (int y = 0; y < resolution; ++y) {
       // The row of voxels along x, in the camera frame: start and step.
@@ -261,19 +352,19 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         // Nearest pixel (floor of +0.5; the range check first keeps the cast defined).
         const double u_real = camera_.fx * p.x() * inverse_z + camera_.cx + 0.5;
         const double v_real = camera_.fy * p.y() * inverse_z + camera_.cy + 0.5;
-        if (!(u_real >= 0.0 && v_real >= 0.0 && u_real < view.depth.cols &&
-              v_real < view.depth.rows))
-          continue;
+        if (!(u_real >= 0.0 && v_real >= 0.0 && u_real < cols && v_real < rows)) continue;
         const int u = static_cast<int>(u_real), v = static_cast<int>(v_real);
-        const double measured = view.depth.ptr<float>(v)[u];
+        const float* sample = view.depth_and_ray + 2 * (static_cast<std::size_t>(v) * cols + u);
+        const double measured = sample[0];
         if (!(measured > 0.0)) continue;
         // Signed distance along the ray, positive in front of the surface; truncated; nothing
         // behind the band (unseen). Depth to distance along the pixel's ray: its length per
         // unit depth.
-        const double distance = (measured - p.z()) * ray_length_.ptr<float>(v)[u];
+        const double distance = (measured - p.z()) * sample[1];
         if (distance < -options_.truncation) continue;
         const double tsdf = std::min(1.0, distance / options_.truncation);
-        const double weight = sign * Weight(measured);
+        const double weight =
+            sign * InverseDepthVariance(measured, options_.disparity_noise, focal_baseline);
         const std::size_t cell =
             first + static_cast<std::size_t>(x + resolution * (y + resolution * z));
         float& stored_tsdf = view.tsdf[cell];
@@ -290,8 +381,9 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         }
         const double g = view.grey.ptr<std::uint8_t>(v)[u];
         stored_tsdf = static_cast<float>((stored_tsdf * stored_weight + tsdf * weight) / total);
+        const double mean_grey = (stored_grey * stored_weight + g * weight) / total;
         stored_grey = static_cast<std::uint8_t>(
-            std::clamp(std::lround((stored_grey * stored_weight + g * weight) / total), 0L, 255L));
+            std::clamp(RoundHalfAwayFromZero(std::clamp(mean_grey, -1.0, 256.0)), 0L, 255L));
         stored_weight = static_cast<float>(total);
       }
     }

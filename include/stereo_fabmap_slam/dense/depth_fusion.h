@@ -90,13 +90,12 @@ class DepthFusion {
   // One block's voxels updated by one view (`sign` -1 takes it out).
   void UpdateBlock(const ViewData& view, const Eigen::Vector3i& block, int buffer_index,
                    double sign) const;
-  // The inverse variance of a depth measurement [1/m^2].
-  double Weight(double depth) const;
   std::vector<float> GreyAt(const std::vector<Eigen::Vector3d>& points) const;
 
   FusionOptions options_;
   geometry::StereoCamera camera_;
-  cv::Mat ray_length_;  // CV_32F: each pixel's ray length per unit of depth
+  cv::Mat ray_length_;                // CV_32F: each pixel's ray length per unit of depth
+  std::vector<float> depth_and_ray_;  // the view being fused: ViewData::depth_and_ray
   std::unique_ptr<Volume> volume_;
 };
 
