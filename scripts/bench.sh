@@ -46,6 +46,27 @@ for name, cell in rows:
 PYTHON
 
 echo
+echo "dense map (run_dataset --dense, issue 33's budget: depth + fusion <= 40 ms a keyframe):"
+echo
+for run in $(seq 1 "$RUNS"); do
+  build/bin/run_dataset "$DATA/euroc/MH01_first10s" --quiet --dense --output "$OUT/dense/run$run" > /dev/null
+done
+/usr/bin/python3 - "$OUT/dense" "$RUNS" <<'PYTHON'
+import json, statistics, sys
+out, runs = sys.argv[1], int(sys.argv[2])
+s = [json.load(open(f"{out}/run{i}/summary.json")) for i in range(1, runs + 1)]
+median = lambda key: statistics.median(r[key] for r in s)
+print(f"| MH01_first10s --dense, {runs} runs | median |")
+print("| --- | --- |")
+print(f"| keyframes fused | {s[0]['dense_keyframes']} |")
+print(f"| depth a keyframe [ms] | {median('dense_depth_ms_median'):.1f} |")
+print(f"| fusion a keyframe [ms] | {median('dense_fusion_ms_median'):.1f} |")
+print(f"| depth + fusion [ms] | {statistics.median(r['dense_depth_ms_median'] + r['dense_fusion_ms_median'] for r in s):.1f} |")
+print(f"| blocks, volume [MB] | {s[0]['dense_blocks']}, {s[0]['dense_volume_mb']:.0f} |")
+print(f"| mesh vertices | {s[0]['dense_mesh_vertices']} |")
+PYTHON
+
+echo
 echo "place recognition (build/bin/benchmark_fabmap: synthetic words, fixed seeds, one core):"
 echo
 build/bin/benchmark_fabmap
