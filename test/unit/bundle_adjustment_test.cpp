@@ -395,8 +395,8 @@ RingErrors RefineARingWithOneWrongStep(std::uint64_t seed) {
 // of 32 steps (noise-free observations give the truth to 1e-5 m): 1.23-1.73 cm (0.39-0.55 of the
 // pose graph's 3.17) and 0.16-0.32 degrees in the five draws. The bounds, 0.7 of the pose graph's
 // (2.2 cm) and 0.5 degrees, sit about two of the draws' spreads (0.5 cm, 0.16 degrees) above
-// the worst draw: another noise implementation's draws stay under them, a refinement that does
-// not measure the steps by their points (the pose graph's 3.17 cm) does not.
+// the worst draw, room for draws not measured; a refinement that does not measure the steps by
+// their points (the pose graph's 3.17 cm) stays above them.
 TEST(GlobalRefinement, MeasuresEveryStepByItsPointsWhereThePoseGraphSpreadsTheLoop) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const RingErrors errors = RefineARingWithOneWrongStep(seed);

@@ -207,7 +207,8 @@ TEST_F(MappingStageTest, ARefinementFusesThePointsALoopSawOnBothPasses) {
 // it (the next door of a corridor). With the distance check none is fused, and the second pass
 // ends where it ends without fusing (to 0.1 mm: the same problem). With the check off they are
 // fused: the outlier test then takes the second pass's observations of its fused points out,
-// which are all it had, and keyframes 7 and 8, held by nothing, end metres away (14.5 m here).
+// which are all it had, and keyframes 7 and 8, held by nothing, end metres away (15.4 m here;
+// the bound, 1 m, is twenty times the 5 cm by which the loop and the odometry disagree).
 TEST_F(MappingStageTest, LoopPointsFarApartInTheMapAreNotFused) {
   const auto look_alike = [this](std::int64_t point) -> std::int64_t {
     for (std::size_t other = 0; other < world_.points.size(); ++other) {
