@@ -16,6 +16,8 @@ void StereoDepthOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("min_texture", &min_texture);
   visitor.Visit("max_depth", &max_depth);
   visitor.Visit("refinement_window", &refinement_window);
+  visitor.Visit("matching_scale", &matching_scale);
+  visitor.Visit("refinement_steps", &refinement_steps);
 }
 
 void StereoDepthOptions::Validate() const {
@@ -41,6 +43,20 @@ void StereoDepthOptions::Validate() const {
     throw std::invalid_argument(section +
                                 "refinement_window must be 0 (none) or odd and >= 3, got " +
                                 std::to_string(refinement_window));
+  }
+  if (matching_scale != 1 && matching_scale != 2) {
+    throw std::invalid_argument(section + "matching_scale must be 1 (full resolution) or 2, got " +
+                                std::to_string(matching_scale));
+  }
+  if (matching_scale != 1 && refinement_window == 0) {
+    throw std::invalid_argument(section +
+                                "matching_scale 2 needs the sub-pixel refinement "
+                                "(refinement_window > 0): the half-resolution disparities are "
+                                "only a start");
+  }
+  if (refinement_steps < 1) {
+    throw std::invalid_argument(section + "refinement_steps must be >= 1, got " +
+                                std::to_string(refinement_steps));
   }
 }
 

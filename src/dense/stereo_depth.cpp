@@ -1,5 +1,6 @@
 #include "stereo_fabmap_slam/dense/stereo_depth.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
@@ -33,17 +34,23 @@ StereoDepth::StereoDepth(const StereoDepthOptions& options, const geometry::Ster
         "StereoDepth: the camera needs a positive baseline and focal length");
   }
   const int area = options_.block_size * options_.block_size;
+  const int scale = options_.matching_scale;
+  // At a coarser scale the same depth range needs fewer disparities (SGBM wants a multiple of
+  // 16), and the speckle filter's region and range are counted in the matched image's pixels.
+  const int disparities = (options_.disparities / scale + 15) / 16 * 16;
+  const int speckle_window = options_.speckle_window / (scale * scale);
+  const int speckle_range = std::max(1, options_.speckle_range / scale);
   // P1 and P2 as OpenCV's documentation suggests for one channel: the penalties for a change of
   // disparity by one pixel (slanted surfaces) and by more (depth edges) between neighbours.
-  // Three-way SGBM: 23 ms a 752 x 480 pair on this machine, against 53 ms for five directions
-  // and 80 ms for four-path HH4, which is less biased on the hall's floor seen at a grazing
-  // angle (median disparity error -0.17 px with 3-way, 0.00 with HH4; elsewhere 0.03 both):
-  // the budget is 40 ms a keyframe for depth and fusion together.
-  matcher_ =
-      cv::StereoSGBM::create(/*minDisparity=*/0, options_.disparities, options_.block_size,
-                             8 * area, 32 * area, options_.left_right_max_difference,
-                             /*preFilterCap=*/63, options_.uniqueness, options_.speckle_window,
-                             options_.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
+  // Three-way SGBM: 23 ms a full 752 x 480 pair on the machine of docs/benchmarks.md's first
+  // dense figures, against 53 ms for five directions and 80 ms for four-path HH4, which is less
+  // biased on the hall's floor seen at a grazing angle (median disparity error -0.17 px with
+  // 3-way, 0.00 with HH4; elsewhere 0.03 both) where the sub-pixel refinement removes most of
+  // the bias anyway: the budget is 40 ms a keyframe for depth and fusion together.
+  matcher_ = cv::StereoSGBM::create(/*minDisparity=*/0, disparities, options_.block_size,
+                                    8 * area, 32 * area, options_.left_right_max_difference,
+                                    /*preFilterCap=*/63, options_.uniqueness, speckle_window,
+                                    speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
 }
 
 cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const {
@@ -51,15 +58,32 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
       left.size() != camera_.size) {
     throw std::invalid_argument("StereoDepth: two 8-bit grey images of the camera's size expected");
   }
+  const int scale = options_.matching_scale;
+  cv::Mat matched_left = left, matched_right = right;
+  if (scale == 2) {
+    cv::pyrDown(left, matched_left);
+    cv::pyrDown(right, matched_right);
+  }
   cv::Mat fixed_point;  // CV_16S, 16 x disparity; negative where no match survived
-  matcher_->compute(left, right, fixed_point);
+  matcher_->compute(matched_left, matched_right, fixed_point);
   cv::Mat disparity;
-  fixed_point.convertTo(disparity, CV_32F, 1.0 / 16.0);
+  fixed_point.convertTo(disparity, CV_32F, scale / 16.0);
+  if (scale != 1) {
+    // Full-resolution pixels 2i and 2i + 1 are the pyramid's pixel i (centre 2i + 0.5), whose
+    // disparity doubled is theirs: nearest-neighbour keeps "no match" where it was.
+    cv::Mat full;
+    cv::resize(disparity, full, left.size(), 0, 0, cv::INTER_NEAREST);
+    disparity = full;
+  }
   // No disparity where the left window is too flat to match, or the matcher found none.
   const cv::Mat flat = LocalDeviation(left, options_.block_size) < options_.min_texture;
   disparity.setTo(0.0f, flat | (disparity <= 0.0f));
   if (options_.refinement_window == 0) return disparity;
-  return DisparityRefinement(options_.refinement_window).Refine(left, right, disparity);
+  const DisparityRefinement refinement(options_.refinement_window);
+  for (int step = 0; step < options_.refinement_steps; ++step) {
+    disparity = refinement.Refine(left, right, disparity);
+  }
+  return disparity;
 }
 
 cv::Mat StereoDepth::DepthFromDisparity(const cv::Mat& disparity) const {

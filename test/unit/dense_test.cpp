@@ -162,10 +162,11 @@ TEST_F(StereoDepthOnTheHall, DepthOfARenderedPairMatchesTheExactDepth) {
         t, errors.coverage, errors.median, errors.bias, errors.beyond_two_px);
     // Bounds from what the matcher can do on these images, not from one run: SGBM's sub-pixel
     // fit on 5 x 5 windows under 2 grey levels of noise is good to about a fifth of a pixel on
-    // textured surfaces, the refinement's 15 x 15 windows to less (measured 0.09-0.16 px at
-    // these poses; 0.14-0.18 without the refinement), so a median of 0.3 px (5 cm at 3 m) would
-    // mean a systematic error (a wrong baseline or rectification). The left-right check,
-    // uniqueness and speckle filter leave few gross errors (measured at most 0.8 % beyond 2 px).
+    // textured surfaces, the refinement's 15 x 15 windows to less (measured 0.09-0.15 px at
+    // these poses, matched at half or at full resolution; 0.14-0.18 without the refinement), so
+    // a median of 0.3 px (5 cm at 3 m) would mean a systematic error (a wrong baseline or
+    // rectification). The left-right check, uniqueness and speckle filter leave few gross errors
+    // (measured at most 1.1 % beyond 2 px, 0.8 % matched at full resolution).
     // Depth is missing on flat parts of the photos, the paint between them and beside occlusions
     // (measured coverage 0.51-0.72 of the pixels within max_depth); under 0.4 the texture filter
     // or the checks would be discarding surfaces a keyframe must give.
@@ -506,8 +507,15 @@ TEST(StereoDepthOptions, InvalidSettingsAreRefused) {
   options = StereoDepthOptions();
   options.refinement_window = 8;
   EXPECT_THROW(options.Validate(), std::invalid_argument);
-  options.refinement_window = 0;  // no refinement
+  options.refinement_window = 0;  // half-resolution matches are only the refinement's start
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+  options.matching_scale = 1;  // full-resolution matches may stand alone
   EXPECT_NO_THROW(options.Validate());
+  options.matching_scale = 3;
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+  options = StereoDepthOptions();
+  options.refinement_steps = 0;
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
   EXPECT_NO_THROW(StereoDepthOptions().Validate());
 }
 
