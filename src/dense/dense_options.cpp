@@ -75,8 +75,9 @@ void FusionOptions::Validate() const {
     throw std::invalid_argument(section + "voxel_size must be a finite number > 0");
   if (!(truncation >= voxel_size) || !std::isfinite(truncation))
     throw std::invalid_argument(section + "truncation must be at least one voxel");
-  if (block_resolution < 2)
-    throw std::invalid_argument(section + "block_resolution must be at least 2");
+  if (block_resolution < 2 || block_resolution > kMaxBlockResolution)
+    throw std::invalid_argument(section + "block_resolution must be from 2 to " +
+                                std::to_string(kMaxBlockResolution));
   if (!(disparity_noise > 0) || !std::isfinite(disparity_noise))
     throw std::invalid_argument(section + "disparity_noise must be a finite number > 0");
   if (!(max_surface_sigma > 0) || !std::isfinite(max_surface_sigma))

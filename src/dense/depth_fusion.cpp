@@ -1,6 +1,7 @@
 #include "stereo_fabmap_slam/dense/depth_fusion.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -341,26 +342,44 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
   const Eigen::Vector3d step = view.R.col(0) * voxel;
   const int cols = view.depth.cols, rows = view.depth.rows;
   const double focal_baseline = camera_.fx * camera_.baseline;
+  // Each row of voxels along x in two passes: first every voxel's pixel, without a branch, then
+  // the depth reads and updates of the voxels inside the image. The projections no longer wait
+  // behind each voxel's depth read and its hard-to-predict tests (three quarters of the voxels
+  // visited on MH01 see a pixel without depth): fusion about 15 % less on MH01 and the hall
+  // loop, the same meshes (docs/benchmarks.md).
+  std::array<int, FusionOptions::kMaxBlockResolution> pixel_u, pixel_v;
+  std::array<double, FusionOptions::kMaxBlockResolution> voxel_depth;
+  const double u_offset = camera_.cx + 0.5, v_offset = camera_.cy + 0.5;
   for (int z = 0; z < resolution; ++z) {
     for (int y = 0; y < resolution; ++y) {
       // The row of voxels along x, in the camera frame: start and step.
       const Eigen::Vector3d start = view.R * (origin + voxel * Eigen::Vector3d(0, y, z)) + view.t;
       for (int x = 0; x < resolution; ++x) {
         const Eigen::Vector3d p = start + x * step;
-        if (p.z() <= 1e-3) continue;
-        const double inverse_z = 1.0 / p.z();
-        // Nearest pixel (floor of +0.5; the range check first keeps the cast defined).
-        const double u_real = camera_.fx * p.x() * inverse_z + camera_.cx + 0.5;
-        const double v_real = camera_.fy * p.y() * inverse_z + camera_.cy + 0.5;
-        if (!(u_real >= 0.0 && v_real >= 0.0 && u_real < cols && v_real < rows)) continue;
-        const int u = static_cast<int>(u_real), v = static_cast<int>(v_real);
+        const bool in_front = p.z() > 1e-3;
+        const double inverse_z = 1.0 / (in_front ? p.z() : 1.0);
+        // Nearest pixel (floor of +0.5); the range check comes before the cast, which is
+        // defined only in range.
+        const double u_real = camera_.fx * p.x() * inverse_z + u_offset;
+        const double v_real = camera_.fy * p.y() * inverse_z + v_offset;
+        const bool inside = in_front && u_real >= 0.0 && v_real >= 0.0 && u_real < cols &&
+                            v_real < rows;
+        pixel_u[static_cast<std::size_t>(x)] = inside ? static_cast<int>(u_real) : -1;
+        pixel_v[static_cast<std::size_t>(x)] = inside ? static_cast<int>(v_real) : 0;
+        voxel_depth[static_cast<std::size_t>(x)] = p.z();
+      }
+      for (int x = 0; x < resolution; ++x) {
+        const int u = pixel_u[static_cast<std::size_t>(x)];
+        if (u < 0) continue;
+        const int v = pixel_v[static_cast<std::size_t>(x)];
         const float* sample = view.depth_and_ray + 2 * (static_cast<std::size_t>(v) * cols + u);
         const double measured = sample[0];
         if (!(measured > 0.0)) continue;
         // Signed distance along the ray, positive in front of the surface; truncated; nothing
         // behind the band (unseen). Depth to distance along the pixel's ray: its length per
         // unit depth.
-        const double distance = (measured - p.z()) * sample[1];
+        const double depth_of_voxel = voxel_depth[static_cast<std::size_t>(x)];
+        const double distance = (measured - depth_of_voxel) * sample[1];
         if (distance < -options_.truncation) continue;
         const double tsdf = std::min(1.0, distance / options_.truncation);
         const double weight =

@@ -494,6 +494,20 @@ TEST_F(StereoDepthOnTheHall, TakingAViewOutLeavesBlocksAllocatedAfterItAsTheyWer
   EXPECT_LT(Quantile(NearestDistances(left.vertices, expected.vertices), 0.99), 0.001);
 }
 
+TEST(FusionOptions, InvalidSettingsAreRefused) {
+  EXPECT_NO_THROW(FusionOptions().Validate());
+  FusionOptions options;
+  options.truncation = options.voxel_size / 2;  // a band thinner than a voxel
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+  options = FusionOptions();
+  options.block_resolution = 1;
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+  options.block_resolution = FusionOptions::kMaxBlockResolution;
+  EXPECT_NO_THROW(options.Validate());
+  options.block_resolution = FusionOptions::kMaxBlockResolution + 1;  // beyond the voxel loop's row
+  EXPECT_THROW(options.Validate(), std::invalid_argument);
+}
+
 TEST(StereoDepthOptions, InvalidSettingsAreRefused) {
   StereoDepthOptions options;
   options.disparities = 60;

@@ -79,6 +79,9 @@ struct FusionOptions {
   // band (8 cm either side of a surface) fills. Against 16 (32 cm) on MH01_first10s: fusion
   // 46.5 -> 28.4 ms a keyframe, volume 950 -> 584 MB; exact depth gives the same surface.
   int block_resolution = 8;
+  // At most this many (a 64^3 block holds 262,144 voxels, far more than any band needs): the
+  // fusion's voxel loop keeps a row of a block on the stack.
+  static constexpr int kMaxBlockResolution = 64;
   // Standard deviation of a stereo disparity [px]: with the rig's focal length and baseline it
   // gives each depth's variance (sigma_z = noise * z^2 / (f * b)), whose inverse weighs the
   // measurement. 0.25 px: the rendered hall's median absolute disparity error, 0.14-0.18 px
