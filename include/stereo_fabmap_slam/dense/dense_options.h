@@ -39,8 +39,8 @@ struct StereoDepthOptions {
   // assumption fails on slanted surfaces as it grows: 15 px spans 10 cm at 3 m. On three routes
   // of the rendered hall, run_dataset --dense with 0 / 15: mesh median 3.15-4.18 / 2.27-2.99
   // cm, 90 % 8.57-10.63 / 7.59-9.51 cm, completeness 0.64-0.74 / 0.69-0.77; 21 px (with two
-  // steps) within 0.1 cm of 15. It costs about 6 ms a keyframe whatever the window
-  // (docs/benchmarks.md).
+  // steps) within 0.1 cm of 15. It costs about 6 ms a keyframe whatever the window (8 ms on the
+  // slower machine of 2026-12-01; docs/benchmarks.md).
   int refinement_window = 15;
   // Resolution the matcher searches at: 1 the full image, 2 half of it (both images halved by
   // OpenCV's pyramid, the disparities doubled back to full resolution; block_size, speckle
