@@ -36,12 +36,11 @@ o3c::Tensor BlockKeys(const std::vector<Eigen::Vector3i>& blocks) {
   return o3c::Tensor(flat, {static_cast<std::int64_t>(blocks.size()), 3}, o3c::Int32);
 }
 
-// The inverse variance of a stereo depth [1/m^2]: sigma_z = noise * z^2 / (f * b). Here, not a
+// The standard deviation of a stereo depth [m]: sigma_z = noise * z^2 / (f * b). Here, not a
 // member, so that the compiler inlines it into the voxel loop (a member of a shared library is
 // called through the PLT).
-inline double InverseDepthVariance(double depth, double disparity_noise, double focal_baseline) {
-  const double sigma = disparity_noise * depth * depth / focal_baseline;
-  return 1.0 / (sigma * sigma);
+inline double DepthDeviation(double depth, double disparity_noise, double focal_baseline) {
+  return disparity_noise * depth * depth / focal_baseline;
 }
 
 // std::lround(x) for |x| < 2^52, where x minus its truncation is exact, but inlined: std::lround
@@ -219,9 +218,10 @@ std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
     open3d::core::HashMap& map, const cv::Mat& depth,
     const Eigen::Isometry3d& T_camera_world) const {
   // A block is updated only if some pixel of its voxels' image footprint measured a surface no
-  // nearer than its nearest voxel minus the band; any other block would come out of the voxel
-  // loop as it went in (each of its voxels projects to no depth, or to one more than the band in
-  // front of it), so leaving it out changes nothing but the time. The footprint: the box of the
+  // nearer than its nearest voxel minus the voxel loop's reach behind a surface (the band, and
+  // behind_band_sigmas deviations); any other block would come out of the voxel loop as it went
+  // in (each of its voxels projects to no depth, or to one farther than that in front of it), so
+  // leaving it out changes nothing but the time. The footprint: the box of the
   // block's voxel centres projected (its corners bound it), rounded to the voxel loop's pixels;
   // the deepest measurement in it is bounded by the farthest depth of every kTile x kTile tile
   // it touches (0 where none). Most of the blocks in a view's frustum are left out so (on
@@ -313,9 +313,15 @@ std::vector<std::pair<Eigen::Vector3i, int>> DepthFusion::VisibleBlocks(
         const float* tile_row = farthest.ptr<float>(ty);
         for (int tx = u0; tx <= u1; ++tx) deepest = std::max(deepest, tile_row[tx]);
       }
-      // Nothing measured, or everything more than the band in front of the nearest voxel (a
-      // micrometre of margin for the voxel loop's own rounding).
-      if (deepest + 1e-6 < near - options_.truncation) continue;
+      // Nothing measured, or everything farther in front of the nearest voxel than the voxel
+      // loop reaches behind a depth (the band, and behind_band_sigmas of the deepest depth's
+      // deviation, the largest in the footprint), with a micrometre of margin for the voxel
+      // loop's own rounding.
+      const double reach =
+          options_.truncation +
+          options_.behind_band_sigmas *
+              DepthDeviation(deepest, options_.disparity_noise, camera_.fx * camera_.baseline);
+      if (deepest + 1e-6 < near - reach) continue;
       tile = ((v0 + v1) / 2) * tiles_x + (u0 + u1) / 2;
     }
     candidates.push_back({tile, buffer_index, block});
@@ -376,14 +382,15 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         const double measured = sample[0];
         if (!(measured > 0.0)) continue;
         // Signed distance along the ray, positive in front of the surface; truncated; nothing
-        // behind the band (unseen). Depth to distance along the pixel's ray: its length per
-        // unit depth.
+        // farther behind than the band and behind_band_sigmas deviations (unseen). Depth to
+        // distance along the pixel's ray: its length per unit depth. Each measurement weighs
+        // by its inverse variance.
         const double depth_of_voxel = voxel_depth[static_cast<std::size_t>(x)];
         const double distance = (measured - depth_of_voxel) * sample[1];
-        if (distance < -options_.truncation) continue;
-        const double tsdf = std::min(1.0, distance / options_.truncation);
-        const double weight =
-            sign * InverseDepthVariance(measured, options_.disparity_noise, focal_baseline);
+        const double sigma = DepthDeviation(measured, options_.disparity_noise, focal_baseline);
+        if (distance < -(options_.truncation + options_.behind_band_sigmas * sigma)) continue;
+        const double tsdf = std::clamp(distance / options_.truncation, -1.0, 1.0);
+        const double weight = sign / (sigma * sigma);
         const std::size_t cell =
             first + static_cast<std::size_t>(x + resolution * (y + resolution * z));
         float& stored_tsdf = view.tsdf[cell];
