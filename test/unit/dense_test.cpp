@@ -499,12 +499,7 @@ TEST_F(StereoDepthOnTheHall, TakingAViewOutLeavesBlocksAllocatedAfterItAsTheyWer
 // rig's deviation there), over the vertices within 1 m of the optical axis.
 double FusedWallOffset(const FusionOptions& options, double wall, int views) {
   // EuRoC's focal length and baseline (so its depth deviation), a quarter of its pixels.
-  geometry::StereoCamera camera;
-  camera.size = cv::Size(376, 240);
-  camera.fx = camera.fy = 458.0;
-  camera.cx = 187.5;
-  camera.cy = 119.5;
-  camera.baseline = 0.11;
+  const geometry::StereoCamera camera{cv::Size(376, 240), 458.0, 458.0, 187.5, 119.5, 0.11};
   const double sigma = options.disparity_noise * wall * wall / (camera.fx * camera.baseline);
   DepthFusion fusion(options, camera);
   const cv::Mat grey(camera.size, CV_8UC1, cv::Scalar(128));
