@@ -368,8 +368,8 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         // defined only in range.
         const double u_real = camera_.fx * p.x() * inverse_z + u_offset;
         const double v_real = camera_.fy * p.y() * inverse_z + v_offset;
-        const bool inside = in_front && u_real >= 0.0 && v_real >= 0.0 && u_real < cols &&
-                            v_real < rows;
+        const bool inside =
+            in_front && u_real >= 0.0 && v_real >= 0.0 && u_real < cols && v_real < rows;
         pixel_u[static_cast<std::size_t>(x)] = inside ? static_cast<int>(u_real) : -1;
         pixel_v[static_cast<std::size_t>(x)] = inside ? static_cast<int>(v_real) : 0;
         voxel_depth[static_cast<std::size_t>(x)] = p.z();

@@ -36,10 +36,9 @@ void ClearUntextured(const cv::Mat& grey, int size, double min_deviation, cv::Ma
         d[u] = 0.0f;
         continue;
       }
-      const double s =
-          sum_bottom[u + size] - sum_top[u + size] - sum_bottom[u] + sum_top[u];
-      const double q = squares_bottom[u + size] - squares_top[u + size] - squares_bottom[u] +
-                       squares_top[u];
+      const double s = sum_bottom[u + size] - sum_top[u + size] - sum_bottom[u] + sum_top[u];
+      const double q =
+          squares_bottom[u + size] - squares_top[u + size] - squares_bottom[u] + squares_top[u];
       if (n * q - s * s < threshold) d[u] = 0.0f;
     }
   }
@@ -68,8 +67,8 @@ StereoDepth::StereoDepth(const StereoDepthOptions& options, const geometry::Ster
   // biased on the hall's floor seen at a grazing angle (median disparity error -0.17 px with
   // 3-way, 0.00 with HH4; elsewhere 0.03 both) where the sub-pixel refinement removes most of
   // the bias anyway: the budget is 40 ms a keyframe for depth and fusion together.
-  matcher_ = cv::StereoSGBM::create(/*minDisparity=*/0, disparities, options_.block_size,
-                                    8 * area, 32 * area, options_.left_right_max_difference,
+  matcher_ = cv::StereoSGBM::create(/*minDisparity=*/0, disparities, options_.block_size, 8 * area,
+                                    32 * area, options_.left_right_max_difference,
                                     /*preFilterCap=*/63, options_.uniqueness, speckle_window,
                                     speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
 }
