@@ -57,7 +57,9 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
     cv::Vec4f* out = terms.ptr<cv::Vec4f>(v);
     float* m = mask.ptr<float>(v);
     for (int u = 0; u < cols; ++u) {
-      if (!(d[u] > 0.0f)) {
+      // A disparity no pair of pixels can have (not finite, or the image's width or more) is
+      // treated as none: the cast below is defined only in range.
+      if (!(d[u] > 0.0f && d[u] < cols)) {
         out[u] = cv::Vec4f(0.0f, 0.0f, 0.0f, 0.0f);
         m[u] = 0.0f;
         continue;
@@ -89,7 +91,7 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
     const cv::Vec4f* sum = sums.ptr<cv::Vec4f>(v);  // g, e, g g, g e
     float* out = refined.ptr<float>(v);
     for (int u = 0; u < disparity.cols; ++u) {
-      if (!(d[u] > 0.0f)) continue;
+      if (!(d[u] > 0.0f && d[u] < disparity.cols)) continue;
       const float sg = sum[u][0], se = sum[u][1], sgg = sum[u][2], sge = sum[u][3];
       const float variance = sgg - sg * sg / n[u];
       // No gradient across the window: the step is undetermined. 1e-3 grey levels squared per

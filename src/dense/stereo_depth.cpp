@@ -89,8 +89,12 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
   cv::Mat disparity;
   fixed_point.convertTo(disparity, CV_32F, scale / 16.0);
   if (scale != 1) {
-    // Full-resolution pixels 2i and 2i + 1 are the pyramid's pixel i (centre 2i + 0.5), whose
-    // disparity doubled is theirs: nearest-neighbour keeps "no match" where it was.
+    // The pyramid's pixel i is centred on full-resolution pixel 2i (cv::pyrDown's 5-tap kernel
+    // at 2i - 2 ... 2i + 2), so nearest-neighbour gives pixel 2i its own disparity and 2i + 1 its
+    // left (and, on odd rows, upper) neighbour's, half a half-resolution pixel off; the
+    // refinement corrects the value on smooth surfaces but cannot move a depth edge, which so
+    // lands up to a pixel right or down. Nearest-neighbour keeps "no match" where it was.
+    // (Interpolating the odd pixels where both neighbours agree is a lever not yet measured.)
     cv::Mat full;
     cv::resize(disparity, full, left.size(), 0, 0, cv::INTER_NEAREST);
     disparity = full;

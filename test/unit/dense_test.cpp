@@ -147,37 +147,41 @@ DisparityErrors Compare(const cv::Mat& depth, const cv::Mat& exact,
 }
 
 TEST_F(StereoDepthOnTheHall, DepthOfARenderedPairMatchesTheExactDepth) {
-  const StereoDepthOptions options;
-  const StereoDepth stereo(options, rectifier_->camera());
-  for (const double t : {2.0, 9.0, 17.0}) {
-    const RenderedPair pair = Render(t);
-    const DisparityErrors errors = Compare(stereo.Depth(pair.left, pair.right), pair.exact_depth,
-                                           rectifier_->camera(), options.max_depth);
-    SCOPED_TRACE(testing::Message()
-                 << "t = " << t << " s: coverage " << errors.coverage << ", median "
-                 << errors.median << " px, beyond 2 px " << errors.beyond_two_px);
-    std::printf(
-        "t = %.0f s: coverage %.3f, median disparity error %.3f px (bias %+.3f), beyond 2 px "
-        "%.4f\n",
-        t, errors.coverage, errors.median, errors.bias, errors.beyond_two_px);
-    // Bounds from what the matcher can do on these images, not from one run: SGBM's sub-pixel
-    // fit on 5 x 5 windows under 2 grey levels of noise is good to about a fifth of a pixel on
-    // textured surfaces, the refinement's 15 x 15 windows to less (measured 0.09-0.15 px at
-    // these poses, matched at half or at full resolution; 0.14-0.18 without the refinement), so
-    // a median of 0.3 px (5 cm at 3 m) would mean a systematic error (a wrong baseline or
-    // rectification). The left-right check, uniqueness and speckle filter leave few gross errors
-    // (measured at most 1.1 % beyond 2 px, 0.8 % matched at full resolution).
-    // Depth is missing on flat parts of the photos, the paint between them and beside occlusions
-    // (measured coverage 0.51-0.72 of the pixels within max_depth); under 0.4 the texture filter
-    // or the checks would be discarding surfaces a keyframe must give.
-    EXPECT_GT(errors.coverage, 0.4);
-    EXPECT_LT(errors.median, 0.3);
-    EXPECT_LT(errors.beyond_two_px, 0.05);
-    EXPECT_EQ(errors.beyond_max_depth, 0.0);
-    // The sub-pixel refinement has no pull toward whole pixels: the median signed error is the
-    // rectification's and the rendering's (measured at most 0.010 px; the matcher alone -0.044
-    // px at t = 9 s, the floor at a grazing angle). 0.03 px is 1 cm at 4 m.
-    EXPECT_LT(std::abs(errors.bias), 0.03);
+  // The default (matched at half resolution) and matched at full resolution: both refined.
+  for (const int scale : {2, 1}) {
+    StereoDepthOptions options;
+    options.matching_scale = scale;
+    const StereoDepth stereo(options, rectifier_->camera());
+    for (const double t : {2.0, 9.0, 17.0}) {
+      const RenderedPair pair = Render(t);
+      const DisparityErrors errors = Compare(stereo.Depth(pair.left, pair.right), pair.exact_depth,
+                                             rectifier_->camera(), options.max_depth);
+      SCOPED_TRACE(testing::Message()
+                   << "scale " << scale << ", t = " << t << " s: coverage " << errors.coverage
+                   << ", median " << errors.median << " px, beyond 2 px " << errors.beyond_two_px);
+      std::printf(
+          "scale %d, t = %.0f s: coverage %.3f, median disparity error %.3f px (bias %+.3f), "
+          "beyond 2 px %.4f\n",
+          scale, t, errors.coverage, errors.median, errors.bias, errors.beyond_two_px);
+      // Bounds from what the matcher can do on these images, not from one run: SGBM's sub-pixel
+      // fit on 5 x 5 windows under 2 grey levels of noise is good to about a fifth of a pixel on
+      // textured surfaces, the refinement's 15 x 15 windows to less (measured 0.09-0.15 px at
+      // these poses, matched at half or at full resolution; 0.14-0.18 without the refinement), so
+      // a median of 0.3 px (5 cm at 3 m) would mean a systematic error (a wrong baseline or
+      // rectification). The left-right check, uniqueness and speckle filter leave few gross errors
+      // (measured at most 1.1 % beyond 2 px matched at half resolution, 0.9 % at full).
+      // Depth is missing on flat parts of the photos, the paint between them and beside occlusions
+      // (measured coverage 0.51-0.72 of the pixels within max_depth); under 0.4 the texture filter
+      // or the checks would be discarding surfaces a keyframe must give.
+      EXPECT_GT(errors.coverage, 0.4);
+      EXPECT_LT(errors.median, 0.3);
+      EXPECT_LT(errors.beyond_two_px, 0.05);
+      EXPECT_EQ(errors.beyond_max_depth, 0.0);
+      // The sub-pixel refinement has no pull toward whole pixels: the median signed error is the
+      // rectification's and the rendering's (measured at most 0.010 px; the matcher alone -0.044
+      // px at t = 9 s, the floor at a grazing angle). 0.03 px is 1 cm at 4 m.
+      EXPECT_LT(std::abs(errors.bias), 0.03);
+    }
   }
 }
 

@@ -43,18 +43,20 @@ struct StereoDepthOptions {
   // slower machine of 2026-12-01; docs/benchmarks.md).
   int refinement_window = 15;
   // Resolution the matcher searches at: 1 the full image, 2 half of it (both images halved by
-  // OpenCV's pyramid, the disparities doubled back to full resolution; block_size, speckle
-  // window and range then count half-resolution pixels), after which the sub-pixel refinement,
-  // which must be on, corrects them at full resolution. A 5 x 5 window at half resolution sees
-  // a 10 x 10 patch of the image (fewer blocks allocated on every route measured: fewer
-  // mismatches, we take it), and the refinement's 15 x 15 window does the sub-pixel work either
-  // way. Against 1, with
-  // run_dataset --dense on three routes of the rendered hall (loop 34 s seeds 1 and 3, figure
-  // eight 40 s seed 2): depth 58-66 -> 23-28 ms a keyframe, mesh median 2.27 / 2.44 / 2.99 ->
-  // 2.17 / 2.32 / 2.81 cm, 90 % 7.59 / 8.12 / 9.51 -> 6.88 / 7.59 / 8.34 cm, completeness
-  // 0.770 / 0.752 / 0.690 -> 0.769 / 0.755 / 0.700; per pair (dense_test) the same median
-  // disparity errors, 0.09-0.15 px (docs/benchmarks.md). No coarser scale is offered: at a
-  // quarter of 752 x 480 a 5 x 5 window spans 20 x 20 px, across most depth edges.
+  // OpenCV's pyramid, the disparities doubled back to full resolution; block_size then counts
+  // half-resolution pixels, while disparities, speckle_window and speckle_range stay in the
+  // full image's and are converted: disparities halved and rounded up to a multiple of 16, the
+  // speckle window divided by 4 and the range by 2, at least 1), after which the sub-pixel
+  // refinement, which must be on, corrects them at full resolution. A 5 x 5 window at half
+  // resolution sees a 10 x 10 patch of the image (fewer blocks allocated on every route
+  // measured: fewer mismatches, we take it), and the refinement's 15 x 15 window does the
+  // sub-pixel work either way. Against 1, with run_dataset --dense on three routes of the
+  // rendered hall (loop 34 s seeds 1 and 3, figure eight 40 s seed 2): depth 58-66 -> 23-28 ms
+  // a keyframe; mesh median 2.27 / 2.44 / 2.99 -> 2.17 / 2.32 / 2.81 cm, 90 % 7.59 / 8.12 /
+  // 9.51 -> 6.88 / 7.59 / 8.34 cm, completeness 0.770 / 0.752 / 0.690 -> 0.769 / 0.755 /
+  // 0.700; per pair (dense_test) the same median disparity errors, 0.09-0.15 px
+  // (docs/benchmarks.md). No coarser scale is offered: at a quarter of 752 x 480 a 5 x 5 window
+  // spans 20 x 20 px, across most depth edges.
   int matching_scale = 2;
   // Steps of the sub-pixel refinement (each at most a pixel), >= 1. Two measured no better than
   // one at either scale (hall loop seed 1, scale 2: mesh 2.17 / 6.88 -> 2.22 / 7.32 cm) and cost
