@@ -56,6 +56,17 @@ void DenseMappingStage::SetMap(const Eigen::Isometry3d& T_map_odom,
   moves_pending_ = true;  // Step finds out whether any keyframe moved far enough
 }
 
+void DenseMappingStage::Add(DenseInput input) {
+  if (auto* pair = std::get_if<DenseStereoPair>(&input)) {
+    AddPair(std::move(*pair));
+  } else if (const auto* keyframe = std::get_if<DenseKeyframe>(&input)) {
+    AddKeyframe(*keyframe);
+  } else {
+    DenseMapUpdate& map = std::get<DenseMapUpdate>(input);
+    SetMap(map.T_map_odom, std::move(map.keyframe_poses));
+  }
+}
+
 Eigen::Isometry3d DenseMappingStage::MapPose(const DenseKeyframe& keyframe) const {
   const auto in_map = map_poses_.find(keyframe.id);
   return in_map != map_poses_.end() ? in_map->second : T_map_odom_ * keyframe.T_odom_camera;

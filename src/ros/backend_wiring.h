@@ -13,7 +13,7 @@
 #include <stereo_fabmap_slam/LoopEdge.h>
 #include <stereo_fabmap_slam/PlaceResult.h>
 
-#include "arrival_queue.h"
+#include "stereo_fabmap_slam/concurrency/arrival_queue.h"
 #include "stereo_fabmap_slam/pipeline/mapping_stage.h"
 
 namespace stereo_fabmap_slam::ros_wiring {
@@ -35,6 +35,6 @@ std_msgs::Header HeaderOf(const BackendInput& input);
 
 // The Backend worker's inputs. Under load the stage adjusts the newest of the waiting
 // keyframes together (MappingStage::Take).
-using BackendQueue = ArrivalQueue<BackendInput>;
+using BackendQueue = concurrency::ArrivalQueue<BackendInput>;
 
 }  // namespace stereo_fabmap_slam::ros_wiring

@@ -26,11 +26,12 @@ DenseMapperParameters ReadDenseMapperParameters(const ros::NodeHandle& private_n
   p.approximate_sync = private_node.param("approximate_sync", p.approximate_sync);
   p.map_frame = private_node.param("map_frame", p.map_frame);
   p.queue_size = private_node.param("queue_size", p.queue_size);
-  p.rate = private_node.param("rate", p.rate);
+  p.worker.view_rate = private_node.param("rate", p.worker.view_rate);
   p.cloud_cell = private_node.param("cloud_cell", p.cloud_cell);
   p.max_mesh_triangles = private_node.param("max_mesh_triangles", p.max_mesh_triangles);
-  p.save_mesh = private_node.param("save_mesh", p.save_mesh);
-  if (p.queue_size < 1 || !(p.rate > 0) || !(p.cloud_cell >= 0) || p.max_mesh_triangles < 1) {
+  p.worker.save_mesh_at_stop = private_node.param("save_mesh", p.worker.save_mesh_at_stop);
+  if (p.queue_size < 1 || !(p.worker.view_rate > 0) || !(p.cloud_cell >= 0) ||
+      p.max_mesh_triangles < 1) {
     throw std::invalid_argument(
         "~queue_size, ~rate and ~max_mesh_triangles must be > 0, ~cloud_cell >= 0");
   }
@@ -41,29 +42,27 @@ DenseMapperParameters ReadDenseMapperParameters(const ros::NodeHandle& private_n
   return p;
 }
 
-std::string PassToStage(const DenseMapperInput& input, dense::DenseMappingStage* stage) {
-  if (const auto* pair = std::get_if<ImagePair>(&input)) {
-    std::string refusal;
-    const std::optional<pipeline::StereoPair> images = StereoPairOf(*pair, &refusal);
-    if (!images) return refusal;
-    stage->AddPair(
-        dense::DenseStereoPair{static_cast<std::int64_t>(pair->left->header.stamp.toNSec()),
-                               images->left.clone(), images->right.clone()});
-    return "";
+std::optional<dense::DenseInput> DenseInputOf(const ImagePair& pair, std::string* refusal) {
+  const std::optional<pipeline::StereoPair> images = StereoPairOf(pair, refusal);
+  if (!images) return std::nullopt;
+  return dense::DenseStereoPair{static_cast<std::int64_t>(pair.left->header.stamp.toNSec()),
+                                images->left.clone(), images->right.clone()};
+}
+
+dense::DenseInput DenseInputOf(const stereo_fabmap_slam::Keyframe& keyframe) {
+  return dense::DenseKeyframe{keyframe.id,
+                              static_cast<std::int64_t>(keyframe.header.stamp.toNSec()),
+                              ros_conversions::FromPoseMessage(keyframe.pose)};
+}
+
+dense::DenseInput DenseInputOf(const stereo_fabmap_slam::MapGraph& graph) {
+  dense::DenseMapUpdate map;
+  map.T_map_odom = ros_conversions::FromTransformMessage(graph.map_to_odom);
+  for (std::size_t i = 0; i < graph.keyframe_ids.size() && i < graph.keyframe_poses.size(); ++i) {
+    map.keyframe_poses[graph.keyframe_ids[i]] =
+        ros_conversions::FromPoseMessage(graph.keyframe_poses[i]);
   }
-  if (const auto* keyframe = std::get_if<stereo_fabmap_slam::KeyframeConstPtr>(&input)) {
-    stage->AddKeyframe(dense::DenseKeyframe{
-        (*keyframe)->id, static_cast<std::int64_t>((*keyframe)->header.stamp.toNSec()),
-        ros_conversions::FromPoseMessage((*keyframe)->pose)});
-    return "";
-  }
-  const stereo_fabmap_slam::MapGraph& graph =
-      *std::get<stereo_fabmap_slam::MapGraphConstPtr>(input);
-  std::map<std::uint64_t, Eigen::Isometry3d> poses;
-  for (std::size_t i = 0; i < graph.keyframe_ids.size() && i < graph.keyframe_poses.size(); ++i)
-    poses[graph.keyframe_ids[i]] = ros_conversions::FromPoseMessage(graph.keyframe_poses[i]);
-  stage->SetMap(ros_conversions::FromTransformMessage(graph.map_to_odom), std::move(poses));
-  return "";
+  return map;
 }
 
 }  // namespace stereo_fabmap_slam::ros_wiring

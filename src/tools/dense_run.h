@@ -10,12 +10,13 @@
 
 namespace stereo_fabmap_slam::tools {
 
-// run_dataset --dense: the dense mapping stage beside the SLAM as the DenseMapper runs it in the
-// graph, in order: every pair and keyframe handed over as it comes, the map after every frame
-// that changed it, one step after each frame; at the end, steps until every keyframe the map
-// moved is fused at its final pose. It lives in a library of its own that run_dataset loads only
-// with --dense: Open3D and the VTK it brings cost some 29 MB of memory at start-up, which a run
-// without a dense map should not carry.
+// run_dataset --dense: the dense mapping stage beside the SLAM, driven by the worker the
+// DenseMapper runs in the graph (dense::DenseMappingWorker): every pair and keyframe pushed as it
+// comes, the map after every frame that changed it; one step after each frame in the caller's
+// thread (the same map every run), or with --threads on the worker's own thread as in the graph;
+// at the end, steps until every keyframe the map moved is fused at its final pose. It lives in a
+// library of its own that run_dataset loads only with --dense: Open3D and the VTK it brings cost
+// some 29 MB of memory at start-up, which a run without a dense map should not carry.
 class DenseRun {
  public:
   virtual ~DenseRun() = default;
@@ -31,7 +32,8 @@ class DenseRun {
 using CreateDenseRunFunction = DenseRun* (*)(const dense::DenseMappingOptions& mapping,
                                              const dense::StereoDepthOptions& depth,
                                              const dense::FusionOptions& fusion,
-                                             const camera::StereoRectifier& rectifier, bool quiet);
+                                             const camera::StereoRectifier& rectifier,
+                                             bool concurrent, bool quiet);
 inline constexpr char kDenseRunLibrary[] = "libstereo_fabmap_slam_dense_run.so";
 inline constexpr char kCreateDenseRunSymbol[] = "stereo_fabmap_slam_create_dense_run";
 

@@ -54,7 +54,9 @@ constexpr char kUsage[] =
     "camera (or a bag played N times faster) sees them; default 1. N may be fractional: 2.5\n"
     "processes pairs 0, 2, 5, 7, 10, ..., as a tracker at 25 ms a pair sees a bag at 5x.\n"
     "--threads maps keyframes (bundle adjustment, pose graph, loop detection) on a second thread\n"
-    "while tracking goes on, as the nodelet graph does: faster, but the result depends on timing.\n"
+    "while tracking goes on, as the nodelet graph does, and with --dense fuses the dense map on\n"
+    "a third thread below their priority, as the DenseMapper does: faster, but the result\n"
+    "depends on timing (a keyframe whose pair the dense map no longer keeps is left out of it).\n"
     "Without it the run is in one thread, in order, and the same input gives the same output.\n"
     "Default configs: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml, " STEREO_FABMAP_SLAM_CONFIG_DIR
     "/fabmap.yaml\n";
@@ -93,7 +95,7 @@ double PeakResidentMegabytes() {
 // path: the build's or the install's lib directory), then beside this program's directory.
 std::unique_ptr<tools::DenseRun> LoadDenseRun(const tools::SlamConfiguration& options,
                                               const camera::StereoRectifier& rectifier,
-                                              bool quiet) {
+                                              bool concurrent, bool quiet) {
   void* library = dlopen(tools::kDenseRunLibrary, RTLD_NOW | RTLD_LOCAL);
   std::string error = library == nullptr ? dlerror() : "";
   if (library == nullptr) {
@@ -110,8 +112,9 @@ std::unique_ptr<tools::DenseRun> LoadDenseRun(const tools::SlamConfiguration& op
     throw std::runtime_error("--dense: " + std::string(tools::kDenseRunLibrary) + " has no " +
                              tools::kCreateDenseRunSymbol);
   }
-  return std::unique_ptr<tools::DenseRun>(
-      create(options.dense_mapping, options.dense_depth, options.dense_fusion, rectifier, quiet));
+  return std::unique_ptr<tools::DenseRun>(create(options.dense_mapping, options.dense_depth,
+                                                 options.dense_fusion, rectifier, concurrent,
+                                                 quiet));
 }
 
 }  // namespace
@@ -202,7 +205,8 @@ int main(int argc, char** argv) {
     if (args->Flag("threads")) slam.EnableConcurrentMapping();
     const std::size_t loaded_keyframes = slam.mapping().pose_graph().size();
     std::unique_ptr<tools::DenseRun> dense_run;
-    if (args->Flag("dense")) dense_run = LoadDenseRun(options, rectifier, quiet);
+    if (args->Flag("dense"))
+      dense_run = LoadDenseRun(options, rectifier, args->Flag("threads"), quiet);
     const double cpu_start = CpuSeconds();
     double processing_ms = 0;  // excludes reading images from disk
     const double wall_start = NowMs();

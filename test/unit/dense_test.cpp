@@ -2,12 +2,14 @@
 // traced along each rectified pixel's ray. The pair is rendered as the synthetic sequences are
 // (EuRoC's rig with its lens distortion, 2 grey levels of noise) and rectified as the SLAM does.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -22,11 +24,14 @@
 #include "stereo_fabmap_slam/datasets/synthetic_sequence.h"
 #include "stereo_fabmap_slam/datasets/texture_library.h"
 #include "stereo_fabmap_slam/dense/dense_mapping_stage.h"
+#include "stereo_fabmap_slam/dense/dense_mapping_worker.h"
 #include "stereo_fabmap_slam/dense/depth_fusion.h"
 #include "stereo_fabmap_slam/dense/disparity_refinement.h"
 #include "stereo_fabmap_slam/dense/keyframe_volume.h"
+#include "stereo_fabmap_slam/dense/ply_files.h"
 #include "stereo_fabmap_slam/dense/stereo_depth.h"
 #include "stereo_fabmap_slam/dense/surface_comparison.h"
+#include "test_support.h"
 
 namespace stereo_fabmap_slam::dense {
 namespace {
@@ -450,6 +455,139 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingStageFusesKeyframesWithTheirPairsAnd
   ASSERT_EQ(report.left_out.size(), 1u);
   EXPECT_NE(report.left_out[0].find("keyframe 5"), std::string::npos) << report.left_out[0];
   EXPECT_EQ(stage.volume().keyframes(), 3u);
+}
+
+// The driver both the DenseMapper and run_dataset --dense run: in the caller's thread one step
+// per StepNow with all that was pushed; the view offered after a change, at most at view_rate,
+// and again after a change nobody took; at the end, steps until every moved keyframe is fused
+// again; with a thread of its own the same map, made on that thread, and the mesh saved at stop.
+TEST_F(StereoDepthOnTheHall, TheDenseMappingWorkerStepsTheStageAsBothDriversDo) {
+  DenseMappingOptions options;
+  options.moves_per_step = 1;
+  const RenderedPair first = Render(2.0), second = Render(3.0);
+  constexpr std::int64_t kFirst = 2'000'000'000, kSecond = 3'000'000'000;
+  Eigen::Isometry3d first_odom = RectifiedLeftPose(2.0), second_odom = RectifiedLeftPose(3.0);
+  first_odom.translation().x() += 0.05;
+  second_odom.translation() += Eigen::Vector3d(0.15, -0.15, 0.0);
+  const DenseMapUpdate corrected{Eigen::Isometry3d::Identity(),
+                                 {{1, RectifiedLeftPose(2.0)}, {2, RectifiedLeftPose(3.0)}}};
+
+  std::size_t fused = 0, moved = 0, views = 0;
+  bool take_view = false;
+  std::thread::id stepped_on;
+  DenseWorkerListener listener;
+  listener.report = [&](const DenseStepReport& report) {
+    fused += report.fused.size();
+    moved += report.moved;
+    stepped_on = std::this_thread::get_id();
+  };
+  listener.view = [&](const DenseMappingStage&) {
+    ++views;
+    return take_view;
+  };
+  DenseWorkerOptions inline_options;
+  inline_options.own_thread = false;
+  inline_options.view_rate = 1e9;  // no pacing in the first part
+  {
+    DenseMappingWorker worker(options, StereoDepthOptions(), FusionOptions(), *rectifier_,
+                              inline_options, listener);
+    worker.Push(DenseStereoPair{kFirst, first.left_raw, first.right_raw});
+    worker.Push(DenseKeyframe{1, kFirst, first_odom});
+    EXPECT_EQ(fused, 0u) << "nothing before the step";
+    worker.StepNow();
+    EXPECT_EQ(fused, 1u);
+    EXPECT_EQ(stepped_on, std::this_thread::get_id());
+    EXPECT_EQ(views, 1u);
+    worker.StepNow();  // nothing new, but the view was not taken: offered again
+    EXPECT_EQ(views, 2u);
+    take_view = true;
+    worker.StepNow();
+    EXPECT_EQ(views, 3u);
+    worker.StepNow();  // taken, nothing changed since
+    EXPECT_EQ(views, 3u);
+    worker.Push(DenseStereoPair{kSecond, second.left_raw, second.right_raw});
+    worker.Push(DenseKeyframe{2, kSecond, second_odom});
+    worker.StepNow();
+    EXPECT_EQ(fused, 2u);
+    worker.Push(corrected);
+    worker.StepNow();  // one of the two moved (moves_per_step)
+    EXPECT_EQ(moved, 1u);
+    EXPECT_TRUE(worker.WithStage([](const DenseMappingStage& stage) { return stage.busy(); }));
+    worker.Finish();
+    EXPECT_EQ(moved, 2u) << "the end of a run fuses every moved keyframe again";
+    EXPECT_GT(worker.busy_seconds(), 0.0);
+    EXPECT_THROW(
+        {
+          inline_options.own_thread = true;
+          DenseMappingWorker threaded(options, StereoDepthOptions(), FusionOptions(), *rectifier_,
+                                      inline_options, {});
+          threaded.StepNow();
+        },
+        std::logic_error);
+    inline_options.own_thread = false;
+  }
+  // Paced: a view that is due once in 1000 s is offered once however often the map changes.
+  inline_options.view_rate = 1e-3;
+  views = 0;
+  {
+    DenseMappingWorker worker(options, StereoDepthOptions(), FusionOptions(), *rectifier_,
+                              inline_options, listener);
+    worker.Push(DenseStereoPair{kFirst, first.left_raw, first.right_raw});
+    worker.Push(DenseKeyframe{1, kFirst, first_odom});
+    worker.StepNow();
+    worker.Push(corrected);
+    worker.StepNow();
+    EXPECT_EQ(views, 1u);
+  }
+  inline_options.view_rate = 0;
+  EXPECT_THROW(DenseMappingWorker(options, StereoDepthOptions(), FusionOptions(), *rectifier_,
+                                  inline_options, listener),
+               std::invalid_argument);
+
+  // Its own thread: the same two keyframes at their corrected poses, the mesh saved at stop.
+  const test::TemporaryDirectory temp;
+  DenseWorkerOptions threaded_options;
+  threaded_options.save_mesh_at_stop = temp.path() + "/at_stop.ply";
+  bool saved = false;
+  listener.saved = [&](const std::string& message, bool success) {
+    saved = success;
+    EXPECT_NE(message.find("2 keyframes"), std::string::npos) << message;
+  };
+  listener.view = nullptr;
+  fused = moved = 0;
+  std::size_t threaded_vertices = 0;
+  {
+    DenseMappingWorker worker(options, StereoDepthOptions(), FusionOptions(), *rectifier_,
+                              threaded_options, listener);
+    worker.Push(DenseKeyframe{1, kFirst, first_odom});  // before its pair, as it may come
+    worker.Push(DenseStereoPair{kFirst, first.left_raw, first.right_raw});
+    worker.Push(DenseStereoPair{kSecond, second.left_raw, second.right_raw});
+    worker.Push(DenseKeyframe{2, kSecond, second_odom});
+    worker.Push(corrected);
+    // The thread takes them while this one waits (two depth maps take well under a second here;
+    // a minute is the bound of a stuck thread, not of a slow machine).
+    const auto until = std::chrono::steady_clock::now() + std::chrono::minutes(1);
+    while (worker.WithStage([&](const DenseMappingStage&) { return fused; }) < 2 &&
+           std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    EXPECT_NE(worker.WithStage([&](const DenseMappingStage&) { return stepped_on; }),
+              std::this_thread::get_id());
+    worker.Finish();
+    EXPECT_EQ(fused, 2u);
+    threaded_vertices = worker.WithStage([](const DenseMappingStage& stage) {
+      return stage.volume().ExtractMesh().vertices.size();
+    });
+  }  // stops: saves
+  EXPECT_TRUE(saved);
+  EXPECT_EQ(ReadMeshPly(threaded_options.save_mesh_at_stop).vertices.size(), threaded_vertices);
+  KeyframeVolume right_first_time(StereoDepthOptions(), FusionOptions(), rectifier_->camera());
+  right_first_time.Add(1, first.left, first.right, RectifiedLeftPose(2.0));
+  right_first_time.Add(2, second.left, second.right, RectifiedLeftPose(3.0));
+  const std::size_t expected = right_first_time.ExtractMesh().vertices.size();
+  // Within rounding, as the stage's test above.
+  EXPECT_NEAR(static_cast<double>(threaded_vertices), static_cast<double>(expected),
+              0.01 * expected);
 }
 
 TEST(DenseMappingOptions, InvalidSettingsAreRefused) {

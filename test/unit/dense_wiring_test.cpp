@@ -1,6 +1,7 @@
 // The DenseMapper's plumbing: its messages handed to the dense mapping stage as run_dataset
 // hands it the same inputs (pairs by stamp, keyframes with their odometry pose, the map).
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -36,19 +37,23 @@ TEST(DenseWiring, MessagesReachTheStageAsTheirStructs) {
 
   // Not an image the stage can take: refused with a reason, nothing handed over.
   const auto not_grey = ImageAt(stamp, size, "32FC1");
-  EXPECT_FALSE(
-      ros_wiring::PassToStage(ros_wiring::ImagePair{not_grey, not_grey, 1}, &stage).empty());
+  std::string refusal;
+  EXPECT_FALSE(ros_wiring::DenseInputOf(ros_wiring::ImagePair{not_grey, not_grey, 1}, &refusal));
+  EXPECT_FALSE(refusal.empty());
 
   // The pair, then its keyframe (by the stamp's nanoseconds) with its odometry pose.
-  EXPECT_EQ(ros_wiring::PassToStage(
-                ros_wiring::ImagePair{ImageAt(stamp, size), ImageAt(stamp, size), 2}, &stage),
-            "");
+  refusal.clear();
+  const std::optional<dense::DenseInput> pair = ros_wiring::DenseInputOf(
+      ros_wiring::ImagePair{ImageAt(stamp, size), ImageAt(stamp, size), 2}, &refusal);
+  ASSERT_TRUE(pair.has_value());
+  EXPECT_EQ(refusal, "");
+  stage.Add(*pair);
   auto keyframe = boost::make_shared<stereo_fabmap_slam::Keyframe>();
   keyframe->header.stamp = stamp;
   keyframe->id = 7;
   const Eigen::Isometry3d T_odom_camera(Eigen::Translation3d(1.0, 2.0, 0.5));
   keyframe->pose = ros_conversions::ToPoseMessage(T_odom_camera);
-  EXPECT_EQ(ros_wiring::PassToStage(stereo_fabmap_slam::KeyframeConstPtr(keyframe), &stage), "");
+  stage.Add(ros_wiring::DenseInputOf(*keyframe));
   dense::DenseStepReport report = stage.Step();
   ASSERT_EQ(report.fused.size(), 1u);
   EXPECT_EQ(report.fused[0].id, 7u);
@@ -59,11 +64,11 @@ TEST(DenseWiring, MessagesReachTheStageAsTheirStructs) {
   graph->map_to_odom = ros_conversions::ToTransformMessage(Eigen::Isometry3d::Identity());
   graph->keyframe_ids = {7};
   graph->keyframe_poses = {ros_conversions::ToPoseMessage(T_odom_camera)};
-  EXPECT_EQ(ros_wiring::PassToStage(stereo_fabmap_slam::MapGraphConstPtr(graph), &stage), "");
+  stage.Add(ros_wiring::DenseInputOf(*graph));
   EXPECT_EQ(stage.Step().moved, 0u);
   graph = boost::make_shared<stereo_fabmap_slam::MapGraph>(*graph);
   graph->keyframe_poses[0].position.x += 0.1;
-  ros_wiring::PassToStage(stereo_fabmap_slam::MapGraphConstPtr(graph), &stage);
+  stage.Add(ros_wiring::DenseInputOf(*graph));
   EXPECT_EQ(stage.Step().moved, 1u);
 }
 

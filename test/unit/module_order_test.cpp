@@ -20,7 +20,7 @@ namespace {
 
 // Lowest first.
 const std::vector<std::string> kModuleOrder = {
-    "io",      "geometry",          "camera",         "features", "map",      "odometry",
+    "concurrency", "io",      "geometry",          "camera",         "features", "map",      "odometry",
     "backend", "place_recognition", "relocalization", "dense",    "pipeline", "evaluation",
     "datasets"};
 

@@ -191,6 +191,11 @@ TEST(ArrivalQueue, HandsOverEverythingThatWaitedInArrivalOrder) {
   queue.Stop();
   worker.join();
   EXPECT_FALSE(queue.TakeAll(std::chrono::seconds(1)).has_value()) << "stopped: no wait";
+  // What came after the stop is still there for the end of a run.
+  queue.Push(pipeline::SlamMode::kMapping);
+  queue.Push(pipeline::SlamMode::kLocalization);
+  EXPECT_EQ(queue.TakeRemaining().size(), 2u);
+  EXPECT_TRUE(queue.TakeRemaining().empty());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -31,6 +32,16 @@ struct DenseKeyframe {
   std::int64_t stamp_ns = 0;
   Eigen::Isometry3d T_odom_camera = Eigen::Isometry3d::Identity();
 };
+
+// The map's state as the stage follows it: map -> odom and the map poses of the keyframes it
+// holds (a MapGraph message, a StereoSlam's MapState).
+struct DenseMapUpdate {
+  Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
+  std::map<std::uint64_t, Eigen::Isometry3d> keyframe_poses;
+};
+
+// Any input of the stage, as a driver queues them in arrival order.
+using DenseInput = std::variant<DenseStereoPair, DenseKeyframe, DenseMapUpdate>;
 
 // What one Step did.
 struct DenseStepReport {
@@ -80,6 +91,8 @@ class DenseMappingStage {
   // fused at their odometry pose through map -> odom until the map has them).
   void SetMap(const Eigen::Isometry3d& T_map_odom,
               std::map<std::uint64_t, Eigen::Isometry3d> keyframe_poses);
+  // One of the three above.
+  void Add(DenseInput input);
 
   // One round of work (see the class comment). Throws what Open3D throws (memory).
   DenseStepReport Step();

@@ -1,6 +1,7 @@
 #pragma once
 
-// A worker thread's inputs, as callbacks push them: the Backend's and the DenseMapper's.
+// A worker thread's inputs, as callbacks (or a driver's loop) push them: the Backend's and the
+// dense mapping worker's (dense/dense_mapping_worker.h).
 
 #include <chrono>
 #include <condition_variable>
@@ -9,7 +10,7 @@
 #include <optional>
 #include <utility>
 
-namespace stereo_fabmap_slam::ros_wiring {
+namespace stereo_fabmap_slam::concurrency {
 
 // The inputs waiting for a worker, in arrival order, handed over all at once. Never bounded by
 // dropping: what a stage takes is its to bound (a keyframe missing from the map would leave a
@@ -37,12 +38,21 @@ class ArrivalQueue {
     wake_.wait_for(lock, timeout, [&] { return stopping_ || !inputs_.empty(); });
     return TakeLocked();
   }
+  // Wakes every waiting TakeAll, which returns nullopt from now on.
   void Stop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       stopping_ = true;
     }
     wake_.notify_all();
+  }
+  // What waits, stopped or not, without waiting: what a worker that was stopped at the end of a
+  // run still has to do.
+  std::deque<Input> TakeRemaining() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::deque<Input> waiting;
+    waiting.swap(inputs_);
+    return waiting;
   }
 
  private:
@@ -59,4 +69,4 @@ class ArrivalQueue {
   bool stopping_ = false;
 };
 
-}  // namespace stereo_fabmap_slam::ros_wiring
+}  // namespace stereo_fabmap_slam::concurrency

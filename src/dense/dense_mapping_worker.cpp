@@ -1,0 +1,107 @@
+#include "stereo_fabmap_slam/dense/dense_mapping_worker.h"
+
+#include <exception>
+#include <stdexcept>
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+namespace stereo_fabmap_slam::dense {
+namespace {
+
+const DenseWorkerOptions& Validated(const DenseWorkerOptions& options) {
+  if (!(options.view_rate > 0))
+    throw std::invalid_argument("the dense map's view rate must be > 0");
+  return options;
+}
+
+}  // namespace
+
+DenseMappingWorker::DenseMappingWorker(const DenseMappingOptions& mapping,
+                                       const StereoDepthOptions& depth, const FusionOptions& fusion,
+                                       const camera::StereoRectifier& rectifier,
+                                       const DenseWorkerOptions& options,
+                                       DenseWorkerListener listener)
+    : options_(Validated(options)),
+      listener_(std::move(listener)),
+      view_period_(1.0 / options.view_rate),
+      stage_(mapping, depth, fusion, rectifier) {
+  if (options_.own_thread) thread_ = std::thread(&DenseMappingWorker::Work, this);
+}
+
+DenseMappingWorker::~DenseMappingWorker() { Stop(); }
+
+void DenseMappingWorker::Push(DenseInput input) { inputs_.Push(std::move(input)); }
+
+void DenseMappingWorker::StepNow() {
+  if (options_.own_thread) throw std::logic_error("the dense mapping worker steps on its thread");
+  StepWith(inputs_.TakeRemaining());
+}
+
+void DenseMappingWorker::Finish() {
+  inputs_.Stop();
+  if (thread_.joinable()) thread_.join();
+  // The end of a run: what came last, and every keyframe the map moved at its final pose.
+  while (StepWith(inputs_.TakeRemaining())) {
+  }
+}
+
+void DenseMappingWorker::Stop() {
+  if (stopped_) return;
+  stopped_ = true;
+  inputs_.Stop();
+  if (thread_.joinable()) thread_.join();
+  if (options_.save_mesh_at_stop.empty()) return;
+  std::lock_guard<std::mutex> lock(stage_mutex_);
+  try {
+    const Mesh mesh = stage_.SaveMesh(options_.save_mesh_at_stop);
+    if (listener_.saved) {
+      listener_.saved("wrote " + options_.save_mesh_at_stop + ": " +
+                          std::to_string(mesh.vertices.size()) + " vertices of " +
+                          std::to_string(stage_.volume().keyframes()) + " keyframes",
+                      true);
+    }
+  } catch (const std::exception& error) {
+    if (listener_.saved) listener_.saved(options_.save_mesh_at_stop + ": " + error.what(), false);
+  }
+}
+
+double DenseMappingWorker::busy_seconds() const {
+  std::lock_guard<std::mutex> lock(stage_mutex_);
+  return busy_seconds_;
+}
+
+void DenseMappingWorker::Work() {
+  // Below the other stages: Linux gives each thread its own nice value. Not being able to lower
+  // it costs the tracker time, not correctness, so the worker goes on regardless.
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
+  bool busy = false;  // the stage has work left: take what came meanwhile and go on at once
+  while (auto inputs = inputs_.TakeAll(busy ? std::chrono::duration<double>(0) : view_period_)) {
+    try {
+      busy = StepWith(std::move(*inputs));
+    } catch (const std::exception& error) {  // Open3D out of memory: the map stays as it was
+      std::lock_guard<std::mutex> lock(stage_mutex_);
+      if (listener_.failed) listener_.failed(error.what());
+      busy = false;  // not at once again: the next inputs, or the next period, try once more
+    }
+  }
+}
+
+bool DenseMappingWorker::StepWith(std::deque<DenseInput> inputs) {
+  const auto start = std::chrono::steady_clock::now();
+  std::lock_guard<std::mutex> lock(stage_mutex_);
+  for (DenseInput& input : inputs) stage_.Add(std::move(input));
+  const DenseStepReport report = stage_.Step();
+  if (listener_.report) listener_.report(report);
+  const auto now = std::chrono::steady_clock::now();
+  if (listener_.view && stage_.view_changed() &&
+      (!last_view_ || now - *last_view_ >= view_period_)) {
+    if (listener_.view(stage_)) stage_.ViewSent();
+    last_view_ = std::chrono::steady_clock::now();
+  }
+  busy_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stage_.busy();
+}
+
+}  // namespace stereo_fabmap_slam::dense
