@@ -74,8 +74,12 @@ double DenseMappingWorker::busy_seconds() const {
 
 void DenseMappingWorker::Work() {
   // Below the other stages: Linux gives each thread its own nice value. Not being able to lower
-  // it costs the tracker time, not correctness, so the worker goes on regardless.
-  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
+  // it costs the tracker time, not correctness, so the worker goes on after saying so.
+  if (setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10) != 0 &&
+      listener_.failed) {
+    std::lock_guard<std::mutex> lock(stage_mutex_);
+    listener_.failed("could not lower the dense mapping thread's priority");
+  }
   bool busy = false;  // the stage has work left: take what came meanwhile and go on at once
   while (auto inputs = inputs_.TakeAll(busy ? std::chrono::duration<double>(0) : view_period_)) {
     try {
@@ -89,16 +93,16 @@ void DenseMappingWorker::Work() {
 }
 
 bool DenseMappingWorker::StepWith(std::deque<DenseInput> inputs) {
-  const auto start = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(stage_mutex_);
+  const auto start = std::chrono::steady_clock::now();  // not the wait for the lock
   for (DenseInput& input : inputs) stage_.Add(std::move(input));
   const DenseStepReport report = stage_.Step();
   if (listener_.report) listener_.report(report);
   const auto now = std::chrono::steady_clock::now();
   if (listener_.view && stage_.view_changed() &&
       (!last_view_ || now - *last_view_ >= view_period_)) {
+    last_view_ = now;  // first: a view that throws is not tried again at once
     if (listener_.view(stage_)) stage_.ViewSent();
-    last_view_ = std::chrono::steady_clock::now();
   }
   busy_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stage_.busy();

@@ -32,7 +32,8 @@ class DenseMapperNodelet : public nodelet::Nodelet {
     input_.reset();  // no image callback runs on after this (StereoImageInput)
     keyframe_subscriber_.shutdown();
     graph_subscriber_.shutdown();
-    // Before the publishers go: the worker's last view and its save at stop use them.
+    // Before the members its listeners use go (the publishers, the parameters): the thread is
+    // joined, then the mesh saved.
     if (const std::shared_ptr<dense::DenseMappingWorker> worker = Worker()) worker->Stop();
   }
 

@@ -25,8 +25,10 @@ class DenseStageRun : public DenseRun {
 
   void AfterFrame(const datasets::StereoImages& images, const pipeline::FrameRecord* frame,
                   const pipeline::StereoSlam& slam) override {
-    worker_.Push(dense::DenseStereoPair{images.timestamp_ns, images.left, images.right});
     if (frame != nullptr && frame->is_keyframe) {
+      // Only a keyframe's pair: here the keyframe decision comes with the pair, and with
+      // --threads a queue of every pair would grow without bound behind a slower dense map.
+      worker_.Push(dense::DenseStereoPair{images.timestamp_ns, images.left, images.right});
       // The tracker's reference is the keyframe it has just made.
       worker_.Push(dense::DenseKeyframe{static_cast<std::uint64_t>(frame->reference_keyframe),
                                         images.timestamp_ns, frame->T_world_camera});

@@ -55,8 +55,9 @@ constexpr char kUsage[] =
     "processes pairs 0, 2, 5, 7, 10, ..., as a tracker at 25 ms a pair sees a bag at 5x.\n"
     "--threads maps keyframes (bundle adjustment, pose graph, loop detection) on a second thread\n"
     "while tracking goes on, as the nodelet graph does, and with --dense fuses the dense map on\n"
-    "a third thread below their priority, as the DenseMapper does: faster, but the result\n"
-    "depends on timing (a keyframe whose pair the dense map no longer keeps is left out of it).\n"
+    "a third thread below their priority, as the DenseMapper does (the keyframes wait for it,\n"
+    "and what it has not fused when the run ends is fused then): faster, but the result\n"
+    "depends on timing.\n"
     "Without it the run is in one thread, in order, and the same input gives the same output.\n"
     "Default configs: " STEREO_FABMAP_SLAM_CONFIG_DIR "/euroc.yaml, " STEREO_FABMAP_SLAM_CONFIG_DIR
     "/fabmap.yaml\n";

@@ -571,6 +571,8 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingWorkerStepsTheStageAsBothDriversDo) 
            std::chrono::steady_clock::now() < until) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
+    ASSERT_GE(worker.WithStage([&](const DenseMappingStage&) { return fused; }), 2u)
+        << "the thread did not fuse the two keyframes within a minute";
     EXPECT_NE(worker.WithStage([&](const DenseMappingStage&) { return stepped_on; }),
               std::this_thread::get_id());
     worker.Finish();

@@ -20,9 +20,9 @@ namespace {
 
 // Lowest first.
 const std::vector<std::string> kModuleOrder = {
-    "concurrency", "io",      "geometry",          "camera",         "features", "map",      "odometry",
-    "backend", "place_recognition", "relocalization", "dense",    "pipeline", "evaluation",
-    "datasets"};
+    "concurrency", "io",      "geometry",          "camera",         "features", "map",
+    "odometry",    "backend", "place_recognition", "relocalization", "dense",    "pipeline",
+    "evaluation",  "datasets"};
 
 // The folders of src/ outside the core, and the highest core module each may include.
 const std::map<std::string, std::string> kOutsideTheCore = {

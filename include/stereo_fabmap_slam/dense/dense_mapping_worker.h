@@ -33,7 +33,8 @@ struct DenseWorkerListener {
   // cloud, a mesh) and return true, or false if nobody wants it now (it is offered again with
   // the next change).
   std::function<bool(const DenseMappingStage&)> view;
-  // A step on the worker's own thread failed (Open3D out of memory): the map stays as it was.
+  // A step or the view on the worker's own thread failed (Open3D out of memory: the map stays
+  // as it was), or its priority could not be lowered.
   std::function<void(const std::string& what)> failed;
   // What the save at stop wrote, or why it failed.
   std::function<void(const std::string& message, bool success)> saved;
