@@ -12,6 +12,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -112,9 +113,11 @@ void DenseMapperNodelet::onInit() {
   input_ = std::make_unique<ros_input::StereoImageInput>(
       node, getPrivateNodeHandle(), p.queue_size, p.approximate_sync,
       [this](const auto& left, const auto& right) {
-        if (!Worker()) return;  // not calibrated yet (camera_info): of no use, not even copied
+        const std::shared_ptr<dense::DenseMappingWorker> worker = Worker();
+        if (!worker) return;  // not calibrated yet (camera_info): of no use, not even copied
         std::string refusal;
-        Push(ros_wiring::DenseInputOf(ros_wiring::ImagePair{left, right, 0}, &refusal));
+        auto pair = ros_wiring::DenseInputOf(ros_wiring::ImagePair{left, right, 0}, &refusal);
+        if (pair) worker->Push(std::move(*pair));
         if (!refusal.empty()) NODELET_WARN_STREAM_THROTTLE(2.0, "stereo pair: " << refusal);
       },
       [](int) {});
