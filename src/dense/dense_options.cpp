@@ -18,6 +18,8 @@ void StereoDepthOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("refinement_window", &refinement_window);
   visitor.Visit("matching_scale", &matching_scale);
   visitor.Visit("refinement_steps", &refinement_steps);
+  visitor.Visit("smoothing_window", &smoothing_window);
+  visitor.Visit("smoothing_agreement", &smoothing_agreement);
 }
 
 void StereoDepthOptions::Validate() const {
@@ -53,6 +55,13 @@ void StereoDepthOptions::Validate() const {
                                 "matching_scale 2 needs the sub-pixel refinement "
                                 "(refinement_window > 0): the half-resolution disparities are "
                                 "only a start");
+  }
+  if (smoothing_window != 0 && (smoothing_window < 3 || smoothing_window % 2 == 0)) {
+    throw std::invalid_argument(section + "smoothing_window must be 0 (none) or odd and >= 3, got " +
+                                std::to_string(smoothing_window));
+  }
+  if (!(smoothing_agreement > 0) || !std::isfinite(smoothing_agreement)) {
+    throw std::invalid_argument(section + "smoothing_agreement must be a finite number > 0");
   }
   if (refinement_steps < 1) {
     throw std::invalid_argument(section + "refinement_steps must be >= 1, got " +

@@ -108,4 +108,30 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
   return refined;
 }
 
+cv::Mat SmoothAgreeingDisparities(const cv::Mat& disparity, int window, double agreement) {
+  if (window < 3 || window % 2 == 0 || disparity.type() != CV_32FC1) {
+    throw std::invalid_argument(
+        "SmoothAgreeingDisparities: a float disparity and an odd window of at least 3 px expected");
+  }
+  cv::Mat with_disparity;
+  cv::Mat(disparity > 0.0f).convertTo(with_disparity, CV_32F, 1.0 / 255.0);
+  cv::Mat values;  // 0 where there is none (a NaN would spread over the window)
+  disparity.copyTo(values);
+  values.setTo(0.0f, with_disparity == 0.0f);
+  const cv::Mat sum = WindowSum(values, window), count = WindowSum(with_disparity, window);
+  cv::Mat smoothed = values.clone();
+  const float limit = static_cast<float>(agreement);
+  for (int v = 0; v < smoothed.rows; ++v) {
+    float* d = smoothed.ptr<float>(v);
+    const float* s = sum.ptr<float>(v);
+    const float* n = count.ptr<float>(v);
+    for (int u = 0; u < smoothed.cols; ++u) {
+      if (!(d[u] > 0.0f)) continue;
+      const float mean = s[u] / n[u];
+      if (std::abs(mean - d[u]) <= limit) d[u] = mean;
+    }
+  }
+  return smoothed;
+}
+
 }  // namespace stereo_fabmap_slam::dense

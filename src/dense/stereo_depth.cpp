@@ -134,7 +134,9 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
   for (int step = 0; step < options_.refinement_steps; ++step) {
     disparity = refinement.Refine(left, right, disparity);
   }
-  return disparity;
+  if (options_.smoothing_window == 0) return disparity;
+  return SmoothAgreeingDisparities(disparity, options_.smoothing_window,
+                                   options_.smoothing_agreement);
 }
 
 cv::Mat StereoDepth::DepthFromDisparity(const cv::Mat& disparity) const {

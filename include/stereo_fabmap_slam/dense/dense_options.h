@@ -62,6 +62,21 @@ struct StereoDepthOptions {
   // one at either scale (hall loop seed 1, scale 2: mesh 2.17 / 6.88 -> 2.22 / 7.32 cm) and cost
   // another 15 ms a keyframe (this machine).
   int refinement_steps = 1;
+  // Window [px] over which the refined disparities are averaged, odd; 0 for none. Each pixel's
+  // refined disparity keeps its own matching error (the refinement corrects it by its window's
+  // mean residual only); the plain mean over a full window takes most of it out, and on a plane,
+  // where the disparity is affine in the image, a symmetric mean is exact however slanted the
+  // plane is. (A gradient-weighted mean, as a one-disparity-per-window Lucas-Kanade gives, is
+  // not: it lost a third of MH01's surface to the one-pixel check.) On the rendered hall
+  // (dense_test): median disparity error 0.090 / 0.146 / 0.116 -> 0.057 / 0.095 / 0.075 px, 90 %
+  // 0.317 / 0.486 / 0.451 -> 0.208 / 0.362 / 0.394 px; the rendered routes' meshes in
+  // docs/benchmarks.md. 15 px, the refinement's window: 7 px left 0.074 / 0.120 / 0.094 px.
+  int smoothing_window = 15;
+  // A pixel whose window mean differs from its own refined disparity by more than this [px]
+  // keeps its own: the window straddles a depth edge or a fold, where the mean is of two
+  // surfaces. 0.5 px: above the refined disparities' 90th percentile error on surfaces (0.32-0.49
+  // px), below the one-pixel step the refinement itself allows (1 px measured the same).
+  double smoothing_agreement = 0.5;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
@@ -87,17 +102,22 @@ struct FusionOptions {
   static constexpr int kMaxBlockResolution = 64;
   // Standard deviation of a stereo disparity [px]: with the rig's focal length and baseline it
   // gives each depth's variance (sigma_z = noise * z^2 / (f * b)), whose inverse weighs the
-  // measurement. 0.25 px: the rendered hall's median absolute disparity error, 0.14-0.18 px
-  // (dense_test), is 0.67 sigma of a normal distribution.
+  // measurement. 0.25 px: the rendered hall's median absolute disparity error before the
+  // refinement, 0.14-0.18 px (dense_test), is 0.67 sigma of a normal distribution; so is the 90th
+  // percentile's mean after the refinement, 0.42 px, 1.645 sigma. The smoothing lowered the
+  // errors (90th percentile mean 0.32 px: 0.2 px by that rule) and 0.25 stays: a lower value
+  // weighs far depths more and lets more of them through max_surface_sigma, a trade rather than a
+  // gain (hall loop seed 1: 0.22 px gave mesh 1.49 / 6.28 cm, completeness 0.792, against 1.34 /
+  // 5.59 cm, 0.766), and real pairs are noisier than rendered ones.
   double disparity_noise = 0.25;
   // A surface is taken out of the volume only where the fused signed distance's standard
   // deviation (1 / sqrt of the summed weights) is at most this [m]. What one far view or a
   // mismatch puts in front of or behind a wall is dropped until enough views agree. 8 cm, the
   // truncation band: a surface whose place is known within the band. On a lap of the rendered
-  // hall at exact poses (dense_test, refined disparities) vertices lie at a median 2.0 cm /
-  // 90 % 6.0 cm from the exact surface and cover 63 % of what the lap measured within reach;
-  // 3 cm gives 0.8 / 3.2 cm and 7 %, no limit 3.0 / 12 cm and 95 %. The errors stay below
-  // those of a normal distribution of this deviation.
+  // hall at exact poses (dense_test, refined and smoothed disparities) vertices lie at a median
+  // 1.3 cm / 90 % 4.0 cm from the exact surface and cover 63 % of what the lap measured within
+  // reach; 3 cm gives 0.65 / 2.4 cm and 7.5 %, no limit 2.0 / 10 cm and 92 %. The errors stay
+  // below those of a normal distribution of this deviation.
   double max_surface_sigma = 0.08;
   // Blocks are allocated only around depths whose standard deviation is at most this [m]
   // (5.7 m at EuRoC's rig); farther depths update the blocks nearer ones allocated. Twice the

@@ -28,4 +28,10 @@ class DisparityRefinement {
   int window_;
 };
 
+// The mean of a disparity image's values (> 0) over a window x window neighbourhood of each
+// pixel with a disparity, where it lies within `agreement` [px] of the pixel's own value (else
+// the pixel keeps its own). See StereoDepthOptions::smoothing_window for why. window: odd, >= 3;
+// disparity: CV_32F. Throws std::invalid_argument otherwise.
+cv::Mat SmoothAgreeingDisparities(const cv::Mat& disparity, int window, double agreement);
+
 }  // namespace stereo_fabmap_slam::dense
