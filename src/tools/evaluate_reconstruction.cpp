@@ -38,7 +38,8 @@ constexpr char kUsage[] =
     "--sequence DIR: a rendered sequence (make_synthetic_sequence); the reference is its exact\n"
     "geometry. Accuracy: each point's distance to the nearest surface; completeness (with --run):\n"
     "the surface the run's keyframes saw, ray-cast from their true poses through every 8th pixel\n"
-    "within --max-depth, covered within --radius.\n"
+    "within --max-depth, covered within --radius; and of that surface the walls (with the sides\n"
+    "of pillars and boxes) and what faces up or down (floor, ceiling, tops of boxes) apart.\n"
     "--reference REF.ply: any reference cloud; accuracy: each point's distance to the nearest\n"
     "reference point; completeness: the reference's points covered within --radius.\n"
     "--run RUN_DIR: the run that made the reconstruction (trajectory.txt, keyframes.txt): its\n"
@@ -75,11 +76,19 @@ Run AlignRun(const std::string& run_dir, const std::string& gt_path,
   return run;
 }
 
-// The surface a rendered scene shows each camera pose, every 8th rectified pixel, within reach.
-std::vector<Eigen::Vector3d> SeenSurface(const datasets::HallScene& scene,
-                                         const evaluation::Trajectory& poses,
-                                         const geometry::StereoCamera& camera, double max_depth) {
-  std::vector<Eigen::Vector3d> seen;
+// The surface a rendered scene shows each camera pose, every 8th rectified pixel, within reach,
+// split by the way the surface faces: walls (and the sides of pillars and boxes) and what faces
+// up or down (floor, ceiling, tops of boxes). The hall is made of axis-aligned boxes (z up), so
+// the face is the axis along which the distance to the scene changes fastest, 2 cm in front of
+// the surface toward the camera.
+struct SeenSurfaces {
+  std::vector<Eigen::Vector3d> all, walls, horizontal;
+};
+
+SeenSurfaces SeenSurface(const datasets::HallScene& scene, const evaluation::Trajectory& poses,
+                         const geometry::StereoCamera& camera, double max_depth) {
+  constexpr float kBack = 0.02f, kStep = 0.005f;  // [m]
+  SeenSurfaces seen;
   for (const evaluation::StampedPose& pose : poses) {
     const Eigen::Vector3f origin = pose.pose.translation().cast<float>();
     const Eigen::Matrix3f rotation = pose.pose.linear().cast<float>();
@@ -87,10 +96,22 @@ std::vector<Eigen::Vector3d> SeenSurface(const datasets::HallScene& scene,
       for (int u = 0; u < camera.size.width; u += 8) {
         const Eigen::Vector3f ray(static_cast<float>((u - camera.cx) / camera.fx),
                                   static_cast<float>((v - camera.cy) / camera.fy), 1.0f);
-        const float distance = scene.Distance(origin, (rotation * ray).normalized());
+        const Eigen::Vector3f direction = (rotation * ray).normalized();
+        const float distance = scene.Distance(origin, direction);
         if (!(distance > 0.0f) || distance / ray.norm() > max_depth)
           continue;  // z = distance * cos
-        seen.push_back((origin + distance * (rotation * ray).normalized()).cast<double>());
+        const Eigen::Vector3f point = origin + distance * direction;
+        const Eigen::Vector3f in_front = point - kBack * direction;
+        Eigen::Vector3f change;
+        for (int axis = 0; axis < 3; ++axis) {
+          const Eigen::Vector3f step = kStep * Eigen::Vector3f::Unit(axis);
+          change[axis] =
+              std::abs(scene.SurfaceDistance(in_front + step) - scene.SurfaceDistance(in_front - step));
+        }
+        Eigen::Index normal_axis = 0;
+        change.maxCoeff(&normal_axis);
+        seen.all.push_back(point.cast<double>());
+        (normal_axis == 2 ? seen.horizontal : seen.walls).push_back(point.cast<double>());
       }
     }
   }
@@ -175,11 +196,15 @@ int main(int argc, char** argv) {
 
     std::vector<double> distances;
     std::vector<Eigen::Vector3d> reference;
+    SeenSurfaces seen;
     if (sequence) {
       const datasets::HallScene scene = datasets::SyntheticSequence::SceneOf(*sequence);
       for (const Eigen::Vector3d& point : points)
         distances.push_back(scene.SurfaceDistance(point.cast<float>()));
-      if (run) reference = SeenSurface(scene, run->true_keyframes, rectifier->camera(), max_depth);
+      if (run) {
+        seen = SeenSurface(scene, run->true_keyframes, rectifier->camera(), max_depth);
+        reference = seen.all;
+      }
     } else {
       reference = dense::ReadCloudPly(*args->Value("reference")).points;
       distances = dense::NearestDistances(points, reference);
@@ -188,6 +213,11 @@ int main(int argc, char** argv) {
     const bool has_completeness = !reference.empty();
     const double completeness =
         has_completeness ? dense::Completeness(points, reference, radius) : 0.0;
+    const bool has_faces = !seen.all.empty();
+    const double walls_completeness =
+        seen.walls.empty() ? 0.0 : dense::Completeness(points, seen.walls, radius);
+    const double horizontal_completeness =
+        seen.horizontal.empty() ? 0.0 : dense::Completeness(points, seen.horizontal, radius);
 
     if (args->Flag("json")) {
       std::printf("{\"points\": %zu, \"accuracy_median\": %.6f, \"accuracy_p90\": %.6f",
@@ -195,6 +225,11 @@ int main(int argc, char** argv) {
       if (has_completeness)
         std::printf(", \"completeness\": %.6f, \"reference_points\": %zu, \"radius\": %.3f",
                     completeness, reference.size(), radius);
+      if (has_faces)
+        std::printf(
+            ", \"completeness_walls\": %.6f, \"wall_points\": %zu, "
+            "\"completeness_horizontal\": %.6f, \"horizontal_points\": %zu",
+            walls_completeness, seen.walls.size(), horizontal_completeness, seen.horizontal.size());
       std::printf("}\n");
     } else {
       std::printf("points               %zu\n", points.size());
@@ -205,6 +240,12 @@ int main(int argc, char** argv) {
                     completeness, reference.size(), radius);
       else
         std::printf("completeness         - (needs --run with --sequence, or --reference)\n");
+      if (has_faces) {
+        std::printf("  of the walls       %.4f (%zu points: walls, sides of pillars and boxes)\n",
+                    walls_completeness, seen.walls.size());
+        std::printf("  facing up or down  %.4f (%zu points: floor, ceiling, tops of boxes)\n",
+                    horizontal_completeness, seen.horizontal.size());
+      }
     }
     if (const auto picture = args->Value("picture")) {
       char title[160];
