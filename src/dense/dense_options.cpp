@@ -77,6 +77,7 @@ void FusionOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("max_surface_sigma", &max_surface_sigma);
   visitor.Visit("max_allocation_sigma", &max_allocation_sigma);
   visitor.Visit("behind_band_sigmas", &behind_band_sigmas);
+  visitor.Visit("front_uncertain_sigmas", &front_uncertain_sigmas);
 }
 
 void FusionOptions::Validate() const {
@@ -96,6 +97,8 @@ void FusionOptions::Validate() const {
     throw std::invalid_argument(section + "max_allocation_sigma must be > 0");
   if (!(behind_band_sigmas >= 0) || !std::isfinite(behind_band_sigmas))
     throw std::invalid_argument(section + "behind_band_sigmas must be a finite number >= 0");
+  if (!(front_uncertain_sigmas >= 0) || !std::isfinite(front_uncertain_sigmas))
+    throw std::invalid_argument(section + "front_uncertain_sigmas must be a finite number >= 0");
 }
 
 void DenseMappingOptions::Visit(io::OptionVisitor& visitor) {

@@ -389,6 +389,10 @@ void DepthFusion::UpdateBlock(const ViewData& view, const Eigen::Vector3i& block
         const double distance = (measured - depth_of_voxel) * sample[1];
         const double sigma = DepthDeviation(measured, options_.disparity_noise, focal_baseline);
         if (distance < -(options_.truncation + options_.behind_band_sigmas * sigma)) continue;
+        // In front beyond the band but within front_uncertain_sigmas deviations: the surface
+        // may be here, as likely as it may be as far behind, where the band stops; left alone.
+        if (distance > options_.truncation && distance < options_.front_uncertain_sigmas * sigma)
+          continue;
         const double tsdf = std::clamp(distance / options_.truncation, -1.0, 1.0);
         const double weight = sign / (sigma * sigma);
         const std::size_t cell =

@@ -115,8 +115,8 @@ struct FusionOptions {
   // mismatch puts in front of or behind a wall is dropped until enough views agree. 8 cm, the
   // truncation band: a surface whose place is known within the band. On a lap of the rendered
   // hall at exact poses (dense_test, refined and smoothed disparities) vertices lie at a median
-  // 1.3 cm / 90 % 4.0 cm from the exact surface and cover 63 % of what the lap measured within
-  // reach; 3 cm gives 0.65 / 2.4 cm and 7.5 %, no limit 2.0 / 10 cm and 92 %. The errors stay
+  // 1.3 cm / 90 % 4.0 cm from the exact surface and cover 61 % of what the lap measured within
+  // reach; 3 cm gives 0.65 / 2.3 cm and 7.3 %, no limit 2.0 / 8.4 cm and 92 %. The errors stay
   // below those of a normal distribution of this deviation.
   double max_surface_sigma = 0.08;
   // Blocks are allocated only around depths whose standard deviation is at most this [m]
@@ -138,6 +138,20 @@ struct FusionOptions {
   // 0.06: 1.50 / 6.05, 0.742; 1.67 / 7.33, 0.725; 2.09 / 7.41, 0.683. Neither dominates the
   // default on every measure, so it stays 0 (docs/benchmarks.md).
   double behind_band_sigmas = 0.0;
+  // How far in front of a measured surface a voxel beyond the band is left alone rather than
+  // marked free: this many standard deviations of the depth (0: none, every voxel in front of
+  // the band is free space). Where a depth's deviation exceeds the band (beyond 4 m at EuRoC's
+  // rig) a voxel on the wall gets +1 from the depths measured behind it and nothing from those
+  // in front beyond the band, so the fused wall lies behind the true one (10 cm at 5 m,
+  // dense_test); leaving the voxels within two deviations in front alone as well balances the
+  // two sides without writing behind the surface, which behind_band_sigmas does (into what
+  // other views see behind occluding edges). Two deviations: a depth more than that behind the
+  // voxel is rare (2.3 %), so a voxel that far in front is free space. On four hall routes
+  // (mesh median / 90 % [cm], completeness; docs/benchmarks.md), 0 -> 2: loop seed 1 1.34 / 5.59,
+  // 0.766 -> 1.29 / 5.53, 0.769; seed 3 1.52 / 6.93, 0.749 -> 1.50 / 6.93, 0.754; figure eight
+  // 2.00 / 7.18, 0.704 -> 1.82 / 6.74, 0.716; four laps 2.29 / 10.84, 0.819 -> 1.99 / 10.39,
+  // 0.844; 3 measured the same as 2 on seed 1.
+  double front_uncertain_sigmas = 2.0;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument
