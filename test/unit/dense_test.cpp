@@ -14,6 +14,9 @@
 #include <utility>
 #include <vector>
 
+#include <sched.h>
+#include <sys/resource.h>
+
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
@@ -479,11 +482,14 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingWorkerStepsTheStageAsBothDriversDo) 
   std::size_t fused = 0, moved = 0, views = 0;
   bool take_view = false;
   std::thread::id stepped_on;
+  int stepped_policy = -1, stepped_nice = 0;  // the stepping thread's scheduling
   DenseWorkerListener listener;
   listener.report = [&](const DenseStepReport& report) {
     fused += report.fused.size();
     moved += report.moved;
     stepped_on = std::this_thread::get_id();
+    stepped_policy = sched_getscheduler(0);
+    stepped_nice = getpriority(PRIO_PROCESS, 0);  // Linux: 0 is the calling thread
   };
   listener.view = [&](const DenseMappingStage&) {
     ++views;
@@ -579,6 +585,11 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingWorkerStepsTheStageAsBothDriversDo) 
         << "the thread did not fuse the two keyframes within a minute";
     EXPECT_NE(worker.WithStage([&](const DenseMappingStage&) { return stepped_on; }),
               std::this_thread::get_id());
+    // Below every other stage: at SCHED_IDLE, or at nice 19 where that is refused.
+    const auto [policy, nice] = worker.WithStage([&](const DenseMappingStage&) {
+      return std::make_pair(stepped_policy, stepped_nice);
+    });
+    EXPECT_TRUE(policy == SCHED_IDLE || nice == 19) << "policy " << policy << ", nice " << nice;
     worker.Finish();
     EXPECT_EQ(fused, 2u);
     threaded_vertices = worker.WithStage([](const DenseMappingStage& stage) {
