@@ -57,7 +57,8 @@ void StereoDepthOptions::Validate() const {
                                 "only a start");
   }
   if (smoothing_window != 0 && (smoothing_window < 3 || smoothing_window % 2 == 0)) {
-    throw std::invalid_argument(section + "smoothing_window must be 0 (none) or odd and >= 3, got " +
+    throw std::invalid_argument(section +
+                                "smoothing_window must be 0 (none) or odd and >= 3, got " +
                                 std::to_string(smoothing_window));
   }
   if (!(smoothing_agreement > 0) || !std::isfinite(smoothing_agreement)) {

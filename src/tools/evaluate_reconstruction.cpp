@@ -105,8 +105,8 @@ SeenSurfaces SeenSurface(const datasets::HallScene& scene, const evaluation::Tra
         Eigen::Vector3f change;
         for (int axis = 0; axis < 3; ++axis) {
           const Eigen::Vector3f step = kStep * Eigen::Vector3f::Unit(axis);
-          change[axis] =
-              std::abs(scene.SurfaceDistance(in_front + step) - scene.SurfaceDistance(in_front - step));
+          change[axis] = std::abs(scene.SurfaceDistance(in_front + step) -
+                                  scene.SurfaceDistance(in_front - step));
         }
         Eigen::Index normal_axis = 0;
         change.maxCoeff(&normal_axis);

@@ -586,9 +586,8 @@ TEST_F(StereoDepthOnTheHall, TheDenseMappingWorkerStepsTheStageAsBothDriversDo) 
     EXPECT_NE(worker.WithStage([&](const DenseMappingStage&) { return stepped_on; }),
               std::this_thread::get_id());
     // Below every other stage: at SCHED_IDLE, or at nice 19 where that is refused.
-    const auto [policy, nice] = worker.WithStage([&](const DenseMappingStage&) {
-      return std::make_pair(stepped_policy, stepped_nice);
-    });
+    const auto [policy, nice] = worker.WithStage(
+        [&](const DenseMappingStage&) { return std::make_pair(stepped_policy, stepped_nice); });
     EXPECT_TRUE(policy == SCHED_IDLE || nice == 19) << "policy " << policy << ", nice " << nice;
     worker.Finish();
     EXPECT_EQ(fused, 2u);

@@ -56,9 +56,9 @@ TEST(EvaluateReconstruction, RenderedLoopMeshLiesOnTheHallAndCoversWhatTheKeyfra
   EXPECT_EQ(wall_points + horizontal_points, JsonNumber(json, "reference_points"));
   EXPECT_GT(wall_points, 0.0);
   EXPECT_GT(horizontal_points, 0.0);
-  EXPECT_NEAR((walls * wall_points + horizontal * horizontal_points) /
-                  (wall_points + horizontal_points),
-              completeness, 2e-6);
+  EXPECT_NEAR(
+      (walls * wall_points + horizontal * horizontal_points) / (wall_points + horizontal_points),
+      completeness, 2e-6);
   EXPECT_FALSE(ReadTextFile(temp.path() + "/errors.png").empty());
 }
 
