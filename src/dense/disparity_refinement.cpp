@@ -119,7 +119,7 @@ cv::Mat SmoothAgreeingDisparities(const cv::Mat& disparity, int window, double a
   disparity.copyTo(values);
   values.setTo(0.0f, with_disparity == 0.0f);
   const cv::Mat sum = WindowSum(values, window), count = WindowSum(with_disparity, window);
-  cv::Mat smoothed = values.clone();
+  cv::Mat& smoothed = values;  // its sums are taken: the values may change in place
   const float limit = static_cast<float>(agreement);
   for (int v = 0; v < smoothed.rows; ++v) {
     float* d = smoothed.ptr<float>(v);

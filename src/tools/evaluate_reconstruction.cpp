@@ -82,7 +82,7 @@ Run AlignRun(const std::string& run_dir, const std::string& gt_path,
 // the face is the axis along which the distance to the scene changes fastest, 2 cm in front of
 // the surface toward the camera.
 struct SeenSurfaces {
-  std::vector<Eigen::Vector3d> all, walls, horizontal;
+  std::vector<Eigen::Vector3d> walls, horizontal;
 };
 
 SeenSurfaces SeenSurface(const datasets::HallScene& scene, const evaluation::Trajectory& poses,
@@ -110,7 +110,6 @@ SeenSurfaces SeenSurface(const datasets::HallScene& scene, const evaluation::Tra
         }
         Eigen::Index normal_axis = 0;
         change.maxCoeff(&normal_axis);
-        seen.all.push_back(point.cast<double>());
         (normal_axis == 2 ? seen.horizontal : seen.walls).push_back(point.cast<double>());
       }
     }
@@ -203,7 +202,8 @@ int main(int argc, char** argv) {
         distances.push_back(scene.SurfaceDistance(point.cast<float>()));
       if (run) {
         seen = SeenSurface(scene, run->true_keyframes, rectifier->camera(), max_depth);
-        reference = seen.all;
+        reference = seen.walls;
+        reference.insert(reference.end(), seen.horizontal.begin(), seen.horizontal.end());
       }
     } else {
       reference = dense::ReadCloudPly(*args->Value("reference")).points;
@@ -211,13 +211,19 @@ int main(int argc, char** argv) {
     }
     const double median = dense::Quantile(distances, 0.5), p90 = dense::Quantile(distances, 0.9);
     const bool has_completeness = !reference.empty();
-    const double completeness =
-        has_completeness ? dense::Completeness(points, reference, radius) : 0.0;
-    const bool has_faces = !seen.all.empty();
-    const double walls_completeness =
-        seen.walls.empty() ? 0.0 : dense::Completeness(points, seen.walls, radius);
-    const double horizontal_completeness =
-        seen.horizontal.empty() ? 0.0 : dense::Completeness(points, seen.horizontal, radius);
+    // With the faces apart (a rendered world) the whole is their average by points: one search
+    // of the reconstruction per kind, none again for the whole.
+    const bool has_faces = !seen.walls.empty() || !seen.horizontal.empty();
+    const double walls_completeness = dense::Completeness(points, seen.walls, radius);
+    const double horizontal_completeness = dense::Completeness(points, seen.horizontal, radius);
+    double completeness = 0.0;
+    if (has_faces) {
+      completeness = (walls_completeness * seen.walls.size() +
+                      horizontal_completeness * seen.horizontal.size()) /
+                     reference.size();
+    } else if (has_completeness) {
+      completeness = dense::Completeness(points, reference, radius);
+    }
 
     if (args->Flag("json")) {
       std::printf("{\"points\": %zu, \"accuracy_median\": %.6f, \"accuracy_p90\": %.6f",
