@@ -1,6 +1,6 @@
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 
-#include <future>
+#include <algorithm>
 
 #include "stereo_fabmap_slam/features/anms.h"
 
@@ -8,7 +8,8 @@ namespace stereo_fabmap_slam::features {
 
 StereoFeatureExtractor::StereoFeatureExtractor(const FeatureOptions& feature_options,
                                                const StereoMatcherOptions& stereo_options,
-                                               const geometry::StereoCamera& camera)
+                                               const geometry::StereoCamera& camera,
+                                               concurrency::HelperThread* helper)
     : options_((feature_options.Validate(), feature_options)),
       camera_(camera),
       left_detector_(feature_options, /*stereo_candidates=*/false),
@@ -17,43 +18,48 @@ StereoFeatureExtractor::StereoFeatureExtractor(const FeatureOptions& feature_opt
       second_extractor_(descriptor_.shareable ? descriptor_.extractor
                                               : CreateDescriptor(feature_options).extractor),
       matcher_(stereo_options, camera, descriptor_.norm, descriptor_.max_match_distance,
-               feature_options.parallel) {}
+               feature_options.parallel ? helper : nullptr),
+      helper_(feature_options.parallel ? helper : nullptr) {}
 
 StereoFeatureExtractor::Detected StereoFeatureExtractor::Detect(const cv::Mat& left,
                                                                 const cv::Mat& right) {
-  Detected detected;
-  if (options_.parallel && left_detector_.supports_bands()) {
-    // Worker: the right image (cheap) and the lower band of the left; this thread: the upper
-    // band. Same corners as one pass over each image; the future joins the worker.
-    const int split = left.rows * 3 / 5;
-    std::vector<cv::KeyPoint> lower;
-    std::future<void> worker = std::async(std::launch::async, [&] {
-      detected.right = right_detector_.DetectRows(right, 0, right.rows);
-      lower = left_detector_.DetectRows(left, split, left.rows);
-    });
-    detected.left = left_detector_.DetectRows(left, 0, split);
-    worker.get();
-    detected.left.insert(detected.left.end(), lower.begin(), lower.end());
-    left_detector_.Adapt(detected.left.size());
-    right_detector_.Adapt(detected.right.size());
-  } else if (options_.parallel) {
-    std::future<std::vector<cv::KeyPoint>> right_corners =
-        std::async(std::launch::async, [&] { return right_detector_.Detect(right); });
-    detected.left = left_detector_.Detect(left);
-    detected.right = right_corners.get();
-  } else {
-    detected.left = left_detector_.Detect(left);
-    detected.right = right_detector_.Detect(right);
-  }
+  Detected detected = DetectCorners(left, right, helper_);
+  left_detector_.Adapt(detected.left.size());
+  right_detector_.Adapt(detected.right.size());
   return Select(std::move(detected), left.size());
 }
 
 StereoFeatureExtractor::Detected StereoFeatureExtractor::DetectWithoutAdapting(
     const cv::Mat& left, const cv::Mat& right) const {
+  return Select(DetectCorners(left, right, nullptr), left.size());
+}
+
+StereoFeatureExtractor::Detected StereoFeatureExtractor::DetectCorners(
+    const cv::Mat& left, const cv::Mat& right, concurrency::HelperThread* helper) const {
+  // Three pieces: the upper and lower bands of the left image and the whole right one (FAST
+  // for stereo candidates, a fifth of AGAST's time), about equal halves for two threads
+  // whichever takes which. The split is the same with or without a helper, so the corners do
+  // not depend on the threads. They are those of one pass over the left image except where
+  // AGAST's suppression, which keeps one corner of each 4-connected blob of corners, meets a
+  // blob the split cuts (features_test: BandDetectionDiffersFromTheWholeImageOnlyAtTheSplit);
+  // a detector without bands takes the whole image.
+  const bool bands = left_detector_.supports_bands();
+  const int split = bands ? left.rows * 3 / 5 : left.rows;
   Detected detected;
-  detected.left = left_detector_.DetectRows(left, 0, left.rows);
-  detected.right = right_detector_.DetectRows(right, 0, right.rows);
-  return Select(std::move(detected), left.size());
+  std::vector<cv::KeyPoint> lower;
+  const auto detect = [&](int piece) {
+    if (piece == 0) detected.left = left_detector_.DetectRows(left, 0, split);
+    if (piece == 1) detected.right = right_detector_.DetectRows(right, 0, right.rows);
+    if (piece == 2) lower = left_detector_.DetectRows(left, split, left.rows);
+  };
+  const int pieces = bands ? 3 : 2;
+  if (helper != nullptr) {
+    helper->ForEachPiece(pieces, detect);
+  } else {
+    for (int piece = 0; piece < pieces; ++piece) detect(piece);
+  }
+  detected.left.insert(detected.left.end(), lower.begin(), lower.end());
+  return detected;
 }
 
 StereoFeatureExtractor::Detected StereoFeatureExtractor::Select(Detected detected,
@@ -71,20 +77,33 @@ StereoFeatureExtractor::Described StereoFeatureExtractor::Describe(const cv::Mat
   // compute() drops key points it cannot describe (too close to the border).
   Described described;
   described.right = std::move(detected.right);
-  if (options_.parallel && !matcher_.uses_descriptors()) {
-    // Two halves of the left key points on two threads; concatenated in order.
-    const std::size_t half = detected.left.size() / 2;
-    std::vector<cv::KeyPoint> second(detected.left.begin() + static_cast<std::ptrdiff_t>(half),
-                                     detected.left.end());
-    detected.left.resize(half);
-    cv::Mat second_descriptors;
-    std::future<void> worker = std::async(
-        std::launch::async, [&] { second_extractor_->compute(left, second, second_descriptors); });
-    descriptor_.extractor->compute(left, detected.left, described.left_descriptors);
-    worker.get();
-    described.left = std::move(detected.left);
-    described.left.insert(described.left.end(), second.begin(), second.end());
-    cv::vconcat(described.left_descriptors, second_descriptors, described.left_descriptors);
+  if (helper_ != nullptr && !matcher_.uses_descriptors()) {
+    // Two halves of the left key points on two threads, concatenated in order: a shareable
+    // extractor (BRISK) serves both, one that is not has a second instance. Not more pieces:
+    // BRISK integrates the whole image on every call (0.04 ms), and its time per key point
+    // varies little, so halves balance the threads.
+    const std::size_t count = detected.left.size();
+    constexpr int pieces = 2;
+    std::vector<std::vector<cv::KeyPoint>> keypoints(static_cast<std::size_t>(pieces));
+    std::vector<cv::Mat> descriptors(static_cast<std::size_t>(pieces));
+    for (int piece = 0; piece < pieces; ++piece) {
+      keypoints[piece].assign(
+          detected.left.begin() + static_cast<std::ptrdiff_t>(count * piece / pieces),
+          detected.left.begin() + static_cast<std::ptrdiff_t>(count * (piece + 1) / pieces));
+    }
+    helper_->ForEachPiece(pieces, [&](int piece) {
+      const cv::Ptr<cv::DescriptorExtractor>& extractor =
+          piece == 0 ? descriptor_.extractor : second_extractor_;
+      extractor->compute(left, keypoints[piece], descriptors[piece]);
+    });
+    for (int piece = 0; piece < pieces; ++piece) {
+      described.left.insert(described.left.end(), keypoints[piece].begin(), keypoints[piece].end());
+    }
+    std::vector<cv::Mat> filled;
+    for (cv::Mat& d : descriptors) {
+      if (!d.empty()) filled.push_back(d);
+    }
+    if (!filled.empty()) cv::vconcat(filled, described.left_descriptors);
     return described;
   }
   described.left = std::move(detected.left);

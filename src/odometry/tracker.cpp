@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <future>
 #include <limits>
 #include <stdexcept>
 
@@ -47,12 +46,13 @@ const char* TrackingStateName(TrackingState state) {
 
 Tracker::Tracker(const TrackerOptions& options, const KeyframePolicyOptions& keyframe_options,
                  const geometry::StereoCamera& camera, int descriptor_norm,
-                 double max_descriptor_distance)
+                 double max_descriptor_distance, concurrency::HelperThread* helper)
     : options_((options.Validate(), options)),
       keyframe_policy_(keyframe_options),
       camera_(camera),
       descriptor_norm_(descriptor_norm),
       max_descriptor_distance_(max_descriptor_distance),
+      helper_(options.parallel ? helper : nullptr),
       local_map_(options.local_keyframes) {
   ransac_options_.kernel = options.pnp_kernel;
   ransac_options_.reprojection_threshold = options.ransac_threshold;
@@ -126,15 +126,19 @@ std::vector<Tracker::Match> Tracker::SearchByProjection(const features::StereoFe
 
   const Match none{nullptr, -1, 0.0};
   BestByKeypoint best_by_keypoint(features.keypoints.size(), none);
-  if (options_.parallel) {
-    BestByKeypoint second_half(features.keypoints.size(), none);
-    const std::size_t middle = points.size() / 2;
-    std::future<void> worker =
-        std::async(std::launch::async, search, middle, points.size(), &second_half);
-    search(0, middle, &best_by_keypoint);
-    worker.get();
-    for (const Match& m : second_half) {
-      if (m.point != nullptr) keep_better(&best_by_keypoint, m);
+  if (helper_ != nullptr) {
+    // Four pieces of the points, each with its own best per key point, merged in piece order
+    // (keep_better's tie rule makes the order irrelevant anyway).
+    constexpr int kPieces = 4;
+    std::vector<BestByKeypoint> pieces(kPieces, BestByKeypoint(features.keypoints.size(), none));
+    helper_->ForEachPiece(kPieces, [&](int piece) {
+      search(points.size() * piece / kPieces, points.size() * (piece + 1) / kPieces,
+             &pieces[static_cast<std::size_t>(piece)]);
+    });
+    for (const BestByKeypoint& piece : pieces) {
+      for (const Match& m : piece) {
+        if (m.point != nullptr) keep_better(&best_by_keypoint, m);
+      }
     }
   } else {
     search(0, points.size(), &best_by_keypoint);

@@ -6,9 +6,13 @@ StereoFrontEnd::StereoFrontEnd(const FrontEndOptions& options, camera::StereoRec
                                Clock clock)
     : rectifier_(std::move(rectifier)),
       clock_(std::move(clock)),
-      extractor_(options.features, options.stereo, rectifier_.camera()),
+      helper_(options.features.parallel || options.tracker.parallel
+                  ? std::make_unique<concurrency::HelperThread>()
+                  : nullptr),
+      rectification_helper_(options.features.parallel ? helper_.get() : nullptr),
+      extractor_(options.features, options.stereo, rectifier_.camera(), helper_.get()),
       tracker_(options.tracker, options.keyframes, rectifier_.camera(),
-               extractor_.descriptor_norm(), extractor_.max_match_distance()) {
+               extractor_.descriptor_norm(), extractor_.max_match_distance(), helper_.get()) {
   if (options.place_features) {
     // The odometry's descriptor instance when the places use the same descriptor and it can be
     // shared (BRISK: one 47 MB table instead of two).
@@ -31,7 +35,7 @@ FrontEndOutput StereoFrontEnd::Process(double timestamp, const cv::Mat& left_raw
     start = now;
   };
   cv::Mat left, right;
-  rectifier_.Rectify(left_raw, right_raw, &left, &right);
+  rectifier_.Rectify(left_raw, right_raw, &left, &right, rectification_helper_);
   lap(&timing.rectification_ms);
   features::StereoFeatureExtractor::Detected detected = extractor_.Detect(left, right);
   lap(&timing.detection_ms);

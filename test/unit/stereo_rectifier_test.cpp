@@ -108,6 +108,26 @@ TEST_F(RectificationOnEuroc, MatchesLieOnTheSameRowWithPositiveDepth) {
       << positive_depth << " of " << epipolar_matches;
 }
 
+// With the front end's helper thread the two images are remapped in bands of rows on two
+// threads: the same pixels as one cv::remap per image.
+TEST_F(RectificationOnEuroc, RemappingInBandsOnTwoThreadsGivesTheSameImages) {
+  concurrency::HelperThread helper;
+  for (const std::size_t frame : {0u, 120u}) {
+    const datasets::StereoImages raw = sequence_.LoadStereoPair(frame);
+    cv::Mat left, right, left_banded, right_banded;
+    rectifier_.Rectify(raw.left, raw.right, &left, &right);
+    for (int run = 0; run < 5; ++run) {
+      rectifier_.Rectify(raw.left, raw.right, &left_banded, &right_banded, &helper);
+      ASSERT_EQ(left_banded.size(), left.size());
+      ASSERT_EQ(right_banded.size(), right.size());
+      EXPECT_EQ(cv::norm(left_banded, left, cv::NORM_INF), 0.0) << frame;
+      EXPECT_EQ(cv::norm(right_banded, right, cv::NORM_INF), 0.0) << frame;
+      left_banded.release();
+      right_banded.release();
+    }
+  }
+}
+
 TEST_F(RectificationOnEuroc, ConfigFileGivesTheSameModelAsSensorYaml) {
   const camera::StereoCalibration from_config =
       camera::ReadStereoCalibrationYaml(RepositoryRoot() + "/config/euroc_stereo.yaml");

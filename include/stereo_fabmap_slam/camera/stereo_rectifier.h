@@ -7,6 +7,7 @@
 
 #include "stereo_fabmap_slam/camera/camera_calibration.h"
 #include "stereo_fabmap_slam/camera/camera_options.h"
+#include "stereo_fabmap_slam/concurrency/helper_thread.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
 
@@ -37,9 +38,10 @@ class StereoRectifier {
                                         const Eigen::Isometry3d& T_body_left_raw);
 
   // Raw mono8 images of the calibrated size in, rectified mono8 images out.
-  // Throws std::invalid_argument on a wrong size or type.
-  void Rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat* left,
-               cv::Mat* right) const;
+  // Throws std::invalid_argument on a wrong size or type. With a helper, bands of rows of both
+  // images are remapped on it and the calling thread (the same pixels as without).
+  void Rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat* left, cv::Mat* right,
+               concurrency::HelperThread* helper = nullptr) const;
 
   const geometry::StereoCamera& camera() const { return camera_; }
   const RectificationParameters& left_parameters() const { return left_; }

@@ -22,7 +22,7 @@ struct FeatureOptions {
   bool adaptive_threshold = true;
   int min_detector_threshold = 5;
   int max_detector_threshold = 80;
-  bool parallel = true;         // detect the left and right images on two threads
+  bool parallel = true;         // share each stage with the front end's second thread
   bool anms = true;             // spread key points with adaptive non-maximal suppression
   double anms_tolerance = 0.1;  // ANMS may return max_features within this fraction
 

@@ -4,6 +4,7 @@
 
 #include <opencv2/features2d.hpp>
 
+#include "stereo_fabmap_slam/concurrency/helper_thread.h"
 #include "stereo_fabmap_slam/features/adaptive_detector.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/features_options.h"
@@ -14,10 +15,9 @@
 namespace stereo_fabmap_slam::features {
 
 // From a rectified stereo pair to StereoFeatures, in three stages that callers may time apart:
-// detection (+ ANMS on the left, strongest on the right; the right image on a second thread if
-// parallel), description (left; right only for descriptor stereo matching), stereo matching and
-// triangulation. Detection adapts its threshold per stream, so one extractor serves one camera
-// pair in time order.
+// detection (+ ANMS on the left, strongest on the right), description (left; right only for
+// descriptor stereo matching), stereo matching and triangulation. Detection adapts its threshold
+// per stream, so one extractor serves one camera pair in time order.
 class StereoFeatureExtractor {
  public:
   struct Detected {
@@ -28,10 +28,13 @@ class StereoFeatureExtractor {
     cv::Mat left_descriptors, right_descriptors;
   };
 
-  // Throws std::invalid_argument for bad options or an unknown detector/descriptor.
+  // Throws std::invalid_argument for bad options or an unknown detector/descriptor. helper:
+  // shares each stage's work with the calling thread if feature_options.parallel (null: the
+  // calling thread alone; the results are the same either way).
   StereoFeatureExtractor(const FeatureOptions& feature_options,
                          const StereoMatcherOptions& stereo_options,
-                         const geometry::StereoCamera& camera);
+                         const geometry::StereoCamera& camera,
+                         concurrency::HelperThread* helper = nullptr);
 
   Detected Detect(const cv::Mat& left, const cv::Mat& right);
   // The same corners for a pair outside the stream (e.g. a view checked against the map): the
@@ -47,6 +50,9 @@ class StereoFeatureExtractor {
   const geometry::StereoCamera& camera() const { return camera_; }
 
  private:
+  // The raw corners of both images, split into pieces for the helper if there is one.
+  Detected DetectCorners(const cv::Mat& left, const cv::Mat& right,
+                         concurrency::HelperThread* helper) const;
   Detected Select(Detected detected, const cv::Size& size) const;  // ANMS or strongest
 
   FeatureOptions options_;
@@ -56,6 +62,7 @@ class StereoFeatureExtractor {
   // For the second thread: the same one if it is shareable, else its own.
   cv::Ptr<cv::DescriptorExtractor> second_extractor_;
   StereoMatcher matcher_;
+  concurrency::HelperThread* helper_;  // not owned; may be null
 };
 
 }  // namespace stereo_fabmap_slam::features

@@ -7,6 +7,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "stereo_fabmap_slam/concurrency/helper_thread.h"
 #include "stereo_fabmap_slam/features/features_options.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 #include "stereo_fabmap_slam/io/option_reader.h"
@@ -20,9 +21,9 @@ namespace stereo_fabmap_slam::features {
 // parabola through the best three offsets.
 class StereoMatcher {
  public:
-  // parallel: match the two halves of the left key points on two threads.
+  // helper: shares the matching of the left key points (null: the calling thread alone).
   StereoMatcher(const StereoMatcherOptions& options, const geometry::StereoCamera& camera, int norm,
-                double max_descriptor_distance, bool parallel = false);
+                double max_descriptor_distance, concurrency::HelperThread* helper = nullptr);
 
   bool uses_descriptors() const { return options_.mode == StereoMatchMode::kDescriptor; }
 
@@ -54,7 +55,7 @@ class StereoMatcher {
   geometry::StereoCamera camera_;
   int norm_;
   double max_descriptor_distance_;
-  bool parallel_;
+  concurrency::HelperThread* helper_;  // not owned; may be null
 };
 
 }  // namespace stereo_fabmap_slam::features

@@ -67,7 +67,7 @@ struct TrackerOptions {
   double max_descriptor_jump = 1.0;       // [m]
   double max_descriptor_jump_deg = 45.0;  // [deg]
   int jump_min_inlier_cells = 6;          // the loop detector's spread (loop_detection)
-  bool parallel = true;                   // search map points on two threads
+  bool parallel = true;                   // search map points on the front end's two threads
   // The StereoTracker nodelet's FrameQueue (odometry/frame_queue.h), for a tracker slower than
   // the camera; the offline runner tracks every frame. 16 pairs absorb a tracker 4 times slower
   // than the camera, and at 20 Hz less than a second of images (12 MB of EuRoC's).

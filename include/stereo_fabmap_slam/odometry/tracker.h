@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core/types.hpp>
 
+#include "stereo_fabmap_slam/concurrency/helper_thread.h"
 #include "stereo_fabmap_slam/features/stereo_features.h"
 #include "stereo_fabmap_slam/geometry/pnp_ransac.h"
 #include "stereo_fabmap_slam/geometry/pose_refiner.h"
@@ -59,10 +60,12 @@ struct TrackingResult {
 // Deterministic for a given input sequence.
 class Tracker {
  public:
-  // Throws std::invalid_argument for bad options.
+  // Throws std::invalid_argument for bad options. helper: shares the search of the map points
+  // with the calling thread if options.parallel (null: the calling thread alone; the same
+  // result either way).
   Tracker(const TrackerOptions& options, const KeyframePolicyOptions& keyframe_options,
-          const geometry::StereoCamera& camera, int descriptor_norm,
-          double max_descriptor_distance);
+          const geometry::StereoCamera& camera, int descriptor_norm, double max_descriptor_distance,
+          concurrency::HelperThread* helper = nullptr);
 
   // `frames_skipped`: camera frames the caller passed over since the last frame it gave to
   // Track (a tracker that cannot keep up); keyframes are then taken before the bounds are
@@ -139,6 +142,7 @@ class Tracker {
   geometry::PnpRansacOptions ransac_options_without_prior_;
   int descriptor_norm_;
   double max_descriptor_distance_;
+  concurrency::HelperThread* helper_;  // not owned; may be null
 
   LocalMap local_map_;
   std::int64_t next_keyframe_id_ = 0;

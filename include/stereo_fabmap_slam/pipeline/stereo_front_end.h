@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
+#include "stereo_fabmap_slam/concurrency/helper_thread.h"
 #include "stereo_fabmap_slam/features/features_options.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 #include "stereo_fabmap_slam/odometry/odometry_options.h"
@@ -92,6 +93,10 @@ class StereoFrontEnd {
  private:
   camera::StereoRectifier rectifier_;
   Clock clock_;
+  // The second thread of every stage that splits its work (docs/benchmarks.md, "One thread
+  // beside the tracker"); null when neither features.parallel nor tracker.parallel.
+  std::unique_ptr<concurrency::HelperThread> helper_;
+  concurrency::HelperThread* rectification_helper_;  // helper_ if features.parallel
   features::StereoFeatureExtractor extractor_;
   odometry::Tracker tracker_;
   std::unique_ptr<place_recognition::ImageDescriber> place_describer_;  // null: no places
