@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "stereo_fabmap_slam/camera/stereo_rectifier.h"
 #include "stereo_fabmap_slam/concurrency/helper_thread.h"
@@ -16,6 +17,7 @@
 #include "stereo_fabmap_slam/features/anms.h"
 #include "stereo_fabmap_slam/features/feature_factory.h"
 #include "stereo_fabmap_slam/features/keypoint_grid.h"
+#include "stereo_fabmap_slam/features/oast_detector.h"
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 #include "test_support.h"
 
@@ -70,6 +72,59 @@ TEST(Anms, FewerPointsThanRequestedAreAllKept) {
   std::vector<cv::KeyPoint> points = {{10, 10, 7, -1, 5}, {20, 20, 7, -1, 9}};
   EXPECT_EQ(SelectWithAnms(points, 10, cv::Size(100, 100), 0.1).size(), 2u);
   EXPECT_FLOAT_EQ(SelectStrongest(points, 1)[0].response, 9.0f);
+}
+
+// OastDetector must give OpenCV's AGAST (OAST_9_16, suppression on) key points exactly, field
+// by field and in the same order, whatever the image: real frames of both EuRoC sequences
+// (raw and rectified, both cameras) and opencv-doc's photographs (graf: strong texture and
+// viewpoint change; HappyFish: large plain areas), at thresholds over the adaptive range.
+TEST(OastDetector, GivesOpenCvsAgastKeyPointsExactly) {
+  std::vector<cv::Mat> images;
+  for (const char* name : {"MH01_first10s", "V101_micro"}) {
+    const datasets::EurocSequence sequence = datasets::EurocSequence::Open(EurocSequencePath(name));
+    const camera::StereoRectifier rectifier =
+        camera::StereoRectifier::FromCalibration(sequence.calibration());
+    for (std::size_t frame = 0; frame < sequence.size(); frame += sequence.size() / 4) {
+      const datasets::StereoImages raw = sequence.LoadStereoPair(frame);
+      cv::Mat left, right;
+      rectifier.Rectify(raw.left, raw.right, &left, &right);
+      images.insert(images.end(), {raw.left, raw.right, left, right});
+    }
+  }
+  for (const char* name : {"graf1.png", "graf3.png", "HappyFish.jpg"}) {
+    const cv::Mat photo = cv::imread(std::string("/usr/share/doc/opencv-doc/examples/data/") + name,
+                                     cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(photo.empty()) << name;
+    images.push_back(photo);
+  }
+  std::size_t compared = 0;
+  for (const int threshold : {5, 12, 20, 40, 80}) {
+    const cv::Ptr<cv::AgastFeatureDetector> opencv =
+        cv::AgastFeatureDetector::create(threshold, true, cv::AgastFeatureDetector::OAST_9_16);
+    const cv::Ptr<OastDetector> ours = OastDetector::create(threshold);
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      std::vector<cv::KeyPoint> expected, found;
+      opencv->detect(images[i], expected);
+      ours->detect(images[i], found);
+      ASSERT_EQ(found.size(), expected.size()) << "image " << i << ", threshold " << threshold;
+      for (std::size_t k = 0; k < found.size(); ++k) {
+        const cv::KeyPoint &a = found[k], &b = expected[k];
+        ASSERT_TRUE(a.pt == b.pt && a.size == b.size && a.angle == b.angle &&
+                    a.response == b.response && a.octave == b.octave && a.class_id == b.class_id)
+            << "image " << i << ", threshold " << threshold << ", key point " << k;
+      }
+      compared += found.size();
+    }
+  }
+  EXPECT_GT(compared, 100000u);  // the comparison saw many key points, blobs among them
+  // The threshold set through the interface the adaptive detector uses takes effect.
+  const cv::Ptr<OastDetector> adapted = OastDetector::create(5);
+  cv::Ptr<cv::AgastFeatureDetector> as_agast = adapted;
+  as_agast->setThreshold(40);
+  std::vector<cv::KeyPoint> at_40, expected_40;
+  adapted->detect(images[0], at_40);
+  cv::AgastFeatureDetector::create(40)->detect(images[0], expected_40);
+  EXPECT_EQ(at_40.size(), expected_40.size());
 }
 
 // The extractor detects the left image in two bands (for two threads). FAST suppresses
