@@ -13,8 +13,8 @@
 
 namespace stereo_fabmap_slam::concurrency {
 
-// Why not std::async, OpenCV's parallel_for_ or TBB (docs/benchmarks.md, "One thread beside
-// the tracker"): std::async starts a thread per call, 50-70 us on a 2-core virtual machine, as
+// Why not std::async, OpenCV's parallel_for_ or TBB (docs/benchmarks.md, "A front end under 5
+// ms"): std::async starts a thread per call, 50-70 us on a 2-core virtual machine, as
 // long as half of a 100 us task; OpenCV runs every parallel_for_ serially while any other
 // thread of the process is inside one (a process-wide flag), so in the nodelet manager the
 // dense mapper's fusion would take the tracker's second core away; and a thread pool's worker

@@ -93,8 +93,8 @@ class StereoFrontEnd {
  private:
   camera::StereoRectifier rectifier_;
   Clock clock_;
-  // The second thread of every stage that splits its work (docs/benchmarks.md, "One thread
-  // beside the tracker"); null when neither features.parallel nor tracker.parallel.
+  // The second thread of every stage that splits its work (docs/benchmarks.md, "A front end
+  // under 5 ms"); null when neither features.parallel nor tracker.parallel.
   std::unique_ptr<concurrency::HelperThread> helper_;
   concurrency::HelperThread* rectification_helper_;  // helper_ if features.parallel
   features::StereoFeatureExtractor extractor_;
