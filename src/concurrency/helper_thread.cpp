@@ -82,11 +82,6 @@ void HelperThread::ForEachPiece(int count, const std::function<void(int)>& piece
   if (job.error) std::rethrow_exception(job.error);
 }
 
-void HelperThread::RunTogether(const std::function<void()>& first,
-                               const std::function<void()>& second) {
-  ForEachPiece(2, [&](int i) { i == 0 ? first() : second(); });
-}
-
 void HelperThread::Work() {
   for (;;) {
     Job* job = nullptr;

@@ -1,7 +1,5 @@
 #include "stereo_fabmap_slam/features/stereo_feature_extractor.h"
 
-#include <algorithm>
-
 #include "stereo_fabmap_slam/features/anms.h"
 
 namespace stereo_fabmap_slam::features {
@@ -82,28 +80,25 @@ StereoFeatureExtractor::Described StereoFeatureExtractor::Describe(const cv::Mat
     // extractor (BRISK) serves both, one that is not has a second instance. Not more pieces:
     // BRISK integrates the whole image on every call (0.04 ms), and its time per key point
     // varies little, so halves balance the threads.
-    const std::size_t count = detected.left.size();
-    constexpr int pieces = 2;
-    std::vector<std::vector<cv::KeyPoint>> keypoints(static_cast<std::size_t>(pieces));
-    std::vector<cv::Mat> descriptors(static_cast<std::size_t>(pieces));
-    for (int piece = 0; piece < pieces; ++piece) {
-      keypoints[piece].assign(
-          detected.left.begin() + static_cast<std::ptrdiff_t>(count * piece / pieces),
-          detected.left.begin() + static_cast<std::ptrdiff_t>(count * (piece + 1) / pieces));
-    }
-    helper_->ForEachPiece(pieces, [&](int piece) {
-      const cv::Ptr<cv::DescriptorExtractor>& extractor =
-          piece == 0 ? descriptor_.extractor : second_extractor_;
-      extractor->compute(left, keypoints[piece], descriptors[piece]);
+    const std::size_t half = detected.left.size() / 2;
+    std::vector<cv::KeyPoint> second(detected.left.begin() + static_cast<std::ptrdiff_t>(half),
+                                     detected.left.end());
+    described.left = std::move(detected.left);
+    described.left.resize(half);
+    cv::Mat second_descriptors;
+    helper_->ForEachPiece(2, [&](int piece) {
+      if (piece == 0) {
+        descriptor_.extractor->compute(left, described.left, described.left_descriptors);
+      } else {
+        second_extractor_->compute(left, second, second_descriptors);
+      }
     });
-    for (int piece = 0; piece < pieces; ++piece) {
-      described.left.insert(described.left.end(), keypoints[piece].begin(), keypoints[piece].end());
+    described.left.insert(described.left.end(), second.begin(), second.end());
+    if (described.left_descriptors.empty()) {
+      described.left_descriptors = second_descriptors;
+    } else if (!second_descriptors.empty()) {
+      cv::vconcat(described.left_descriptors, second_descriptors, described.left_descriptors);
     }
-    std::vector<cv::Mat> filled;
-    for (cv::Mat& d : descriptors) {
-      if (!d.empty()) filled.push_back(d);
-    }
-    if (!filled.empty()) cv::vconcat(filled, described.left_descriptors);
     return described;
   }
   described.left = std::move(detected.left);

@@ -41,15 +41,15 @@ TEST(HelperThread, RunsTwoPiecesAtTheSameTime) {
   std::atomic<bool> second_started{false};
   std::atomic<bool> first_saw_second{false};
   std::thread::id first_thread, second_thread;
-  helper.RunTogether(
-      [&] {
-        first_thread = std::this_thread::get_id();
-        first_saw_second = WaitFor(second_started, std::chrono::seconds(10));
-      },
-      [&] {
-        second_thread = std::this_thread::get_id();
-        second_started = true;
-      });
+  helper.ForEachPiece(2, [&](int piece) {
+    if (piece == 0) {
+      first_thread = std::this_thread::get_id();
+      first_saw_second = WaitFor(second_started, std::chrono::seconds(10));
+    } else {
+      second_thread = std::this_thread::get_id();
+      second_started = true;
+    }
+  });
   EXPECT_TRUE(first_saw_second);
   EXPECT_NE(first_thread, second_thread);
 }
@@ -61,9 +61,13 @@ TEST(HelperThread, WakesAfterSleepingAndStillShares) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     std::atomic<bool> second_started{false};
     bool first_saw_second = false;
-    helper.RunTogether(
-        [&] { first_saw_second = WaitFor(second_started, std::chrono::seconds(10)); },
-        [&] { second_started = true; });
+    helper.ForEachPiece(2, [&](int piece) {
+      if (piece == 0) {
+        first_saw_second = WaitFor(second_started, std::chrono::seconds(10));
+      } else {
+        second_started = true;
+      }
+    });
     EXPECT_TRUE(first_saw_second) << "round " << round;
   }
 }

@@ -1,8 +1,8 @@
 #pragma once
 
 // A second thread for the front end's per-frame work (rectification, detection, description,
-// stereo matching): each stage splits its work into pieces and the calling thread and this one
-// take pieces until none are left.
+// stereo matching, the search of the map points): each stage splits its work into pieces and the
+// calling thread and this one take pieces until none are left.
 
 #include <atomic>
 #include <chrono>
@@ -37,8 +37,6 @@ class HelperThread {
   // (pieces not started yet are then left out). Callers may call from several threads: one
   // at a time gets the helper, the others run their pieces alone.
   void ForEachPiece(int count, const std::function<void(int)>& piece);
-  // first() and second() at the same time (ForEachPiece of two pieces).
-  void RunTogether(const std::function<void()>& first, const std::function<void()>& second);
 
  private:
   struct Job;
