@@ -22,6 +22,7 @@ void BundleAdjustmentOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("window", &window);
   visitor.Visit("fixed_keyframes", &fixed_keyframes);
   visitor.Visit("iterations", &iterations);
+  visitor.Visit("converged_step_decrease", &converged_step_decrease);
   visitor.Visit("rounds", &rounds);
   visitor.Visit("sigma", &sigma);
   visitor.Visit("threads", &threads);
@@ -37,6 +38,9 @@ void BundleAdjustmentOptions::Validate() const {
     throw std::invalid_argument("backend iterations, rounds and threads must be >= 1");
   }
   if (!(sigma > 0)) throw std::invalid_argument("backend.sigma must be > 0");
+  if (!(converged_step_decrease >= 0) || !std::isfinite(converged_step_decrease)) {
+    throw std::invalid_argument("backend.converged_step_decrease must be a finite number >= 0");
+  }
 }
 
 void PoseGraphOptions::Visit(io::OptionVisitor& visitor) {

@@ -66,7 +66,7 @@ class LocalBundleAdjuster {
   map::KeyframeUpdate Optimise();
   // The covariance of each step between consecutive keyframes of the window (the later one free)
   // at the optimum just found (WindowCovariance), into update->step_covariances.
-  void StepCovariances(const std::set<std::int64_t>& point_ids,
+  void StepCovariances(const std::vector<std::int64_t>& point_ids,
                        const std::map<std::int64_t, geometry::PoseParameters>& poses,
                        const std::set<std::int64_t>& free_keyframes,
                        const std::set<std::pair<std::int64_t, std::int64_t>>& rejected,
