@@ -103,6 +103,17 @@ double RmsReprojection(const Problem& problem,
   return std::sqrt(sum / n);
 }
 
+// The deviation of `estimate` from `reference`, on the right: (translation, rotation vector).
+Eigen::Matrix<double, 6, 1> RightDeviation(const Eigen::Isometry3d& reference,
+                                           const Eigen::Isometry3d& estimate) {
+  const Eigen::Isometry3d deviation = reference.inverse() * estimate;
+  Eigen::Matrix<double, 6, 1> error;
+  error.head<3>() = deviation.translation();
+  const Eigen::AngleAxisd angle_axis(deviation.rotation());
+  error.tail<3>() = angle_axis.angle() * angle_axis.axis();
+  return error;
+}
+
 TEST(LocalBundleAdjuster, RecoversPerturbedPosesAndReducesTheError) {
   const Problem problem = MakeProblem();
   backend::BundleAdjustmentOptions options;
@@ -201,11 +212,8 @@ TEST(LocalBundleAdjuster, StepCovarianceMatchesTheSpreadOfRepeatedEstimates) {
     ASSERT_NE(step, update.step_covariances.end()) << "draw " << draw;
     const auto poses = adjuster.KeyframePoses();
     // The estimated step's deviation from the true one, on its right: (translation, rotation).
-    const Eigen::Isometry3d deviation = true_step.inverse() * (poses.at(2).inverse() * poses.at(3));
-    Eigen::Matrix<double, 6, 1> error;
-    error.head<3>() = deviation.translation();
-    const Eigen::AngleAxisd angle_axis(deviation.rotation());
-    error.tail<3>() = angle_axis.angle() * angle_axis.axis();
+    const Eigen::Matrix<double, 6, 1> error =
+        RightDeviation(true_step, poses.at(2).inverse() * poses.at(3));
     nees_sum += error.dot(step->covariance.ldlt().solve(error));
     translation_nees_sum +=
         error.head<3>().dot(step->covariance.topLeftCorner<3, 3>().ldlt().solve(error.head<3>()));
@@ -246,12 +254,14 @@ TEST(SmallStepStop, EndsAfterTheFirstAcceptedSmallStepWhileNoneWasRejected) {
 
 // The window stopped by converged_step_decrease ends where Ceres' own rule ends, within a
 // fraction of the estimate's uncertainty: the last step of the six keyframes' problem (keyframe
-// 4 -> 5), its initial errors four times the other tests' (12-20 cm, ~4 degrees, so that one
-// step does not converge), compared between the two through its covariance. The rule stops after
-// a step of Mahalanobis length at most sqrt(2 x 0.02) = 0.2; the steps left would each be at most
-// half as long as the one before even where convergence is slow (the office world's), so
-// together under 0.2 as well: 0.5 leaves room. Stopping after the first step instead leaves this
-// estimate 7.2 deviations off (measured).
+// 4 -> 5), its initial errors four times the other tests' (about 20 cm and 3.4 degrees, so that
+// one step does not converge), compared between the two through its covariance. The rule stops
+// after a step of Mahalanobis length at most sqrt(2 x 0.02) = 0.2. This problem converges as the
+// rendered hall does (each step's decrease 20-100 times below the one before, its length 4.5-10
+// times shorter), so the steps left sum to under 0.2 / (1 - 1 / 4.5) = 0.26: 0.5 leaves room.
+// (Where convergence is slow, as in the office world, the bound would not follow: that is why the
+// rule is off by default.) Stopping after the first step instead leaves this estimate 7.2
+// deviations off (measured).
 TEST(LocalBundleAdjuster, StoppingAfterASmallStepEndsWithinAFractionOfASigma) {
   const Problem problem = MakeProblem(4);
   std::map<std::int64_t, Eigen::Isometry3d> poses[2];
@@ -271,13 +281,8 @@ TEST(LocalBundleAdjuster, StoppingAfterASmallStepEndsWithinAFractionOfASigma) {
     }
   }
   ASSERT_GT(covariance.trace(), 0.0);
-  const Eigen::Isometry3d converged = poses[0].at(4).inverse() * poses[0].at(5);
-  const Eigen::Isometry3d deviation =
-      converged.inverse() * (poses[1].at(4).inverse() * poses[1].at(5));
-  Eigen::Matrix<double, 6, 1> error;
-  error.head<3>() = deviation.translation();
-  const Eigen::AngleAxisd angle_axis(deviation.rotation());
-  error.tail<3>() = angle_axis.angle() * angle_axis.axis();
+  const Eigen::Matrix<double, 6, 1> error = RightDeviation(
+      poses[0].at(4).inverse() * poses[0].at(5), poses[1].at(4).inverse() * poses[1].at(5));
   const double mahalanobis = std::sqrt(error.dot(covariance.ldlt().solve(error)));
   RecordProperty("mahalanobis", std::to_string(mahalanobis));
   EXPECT_LT(mahalanobis, 0.5);

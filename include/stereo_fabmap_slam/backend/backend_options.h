@@ -15,10 +15,10 @@ struct BundleAdjustmentOptions {
   // linear solve of a step that Ceres' own rule (function_tolerance, 1e-6 of the cost) would
   // mostly reject. Measured at 0.02 (a step of Mahalanobis length 0.2): on the hall routes, MH01
   // and V101 the same trajectories to the printed digit and the 4-lap route's adjustment
-  // 30.4 -> 28.1 ms a keyframe, because there each step's decrease is 20-100 times below the one
-  // before it; but in the office world convergence is slow (a decrease halves from step to step),
-  // the rule stops 10-15 % of the solves early by up to 0.02 sigma^2, and two office routes of
-  // three ended worse (docs/benchmarks.md). So 0, Ceres' rule only, stays the default.
+  // 33.7-33.9 -> 30.2-31.0 ms a keyframe, because there each step's decrease is 20-100 times below
+  // the one before it; but in the office world convergence is slow (a decrease halves from step to
+  // step), the rule stops 10-15 % of the solves early by up to 0.02 sigma^2, and two office routes
+  // of three ended worse (docs/benchmarks.md). So 0, Ceres' rule only, stays the default.
   double converged_step_decrease = 0;
   // Optimise, remove outlier observations, optimise again: at most this many rounds, and a next
   // one only if the last removed observations (otherwise it would start at its optimum).
