@@ -44,7 +44,7 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
   // quantised to 1/32 px, which the sub-pixel step inherits.
   const int rows = disparity.rows, cols = disparity.cols;
   cv::Mat terms(disparity.size(), CV_32FC4);  // g, e, g g, g e
-  cv::Mat mask(disparity.size(), CV_32F);
+  cv::Mat mask(disparity.size(), CV_8U);      // 1 where there is a disparity: summed in integers
   std::vector<float> gradient_row(static_cast<std::size_t>(cols));
   for (int v = 0; v < rows; ++v) {
     const std::uint8_t* r = right.ptr<std::uint8_t>(v);
@@ -55,13 +55,13 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
       gradient_row[static_cast<std::size_t>(i)] = 0.5f * (static_cast<float>(r[after]) - r[before]);
     }
     cv::Vec4f* out = terms.ptr<cv::Vec4f>(v);
-    float* m = mask.ptr<float>(v);
+    std::uint8_t* m = mask.ptr<std::uint8_t>(v);
     for (int u = 0; u < cols; ++u) {
       // A disparity no pair of pixels can have (not finite, or the image's width or more) is
       // treated as none: the cast below is defined only in range.
       if (!(d[u] > 0.0f && d[u] < cols)) {
         out[u] = cv::Vec4f(0.0f, 0.0f, 0.0f, 0.0f);
-        m[u] = 0.0f;
+        m[u] = 0;
         continue;
       }
       const float x = static_cast<float>(u) - d[u];
@@ -74,7 +74,7 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
                       a * gradient_row[static_cast<std::size_t>(x1)];
       const float e = warped - static_cast<float>(l[u]);
       out[u] = cv::Vec4f(g, e, g * g, g * e);
-      m[u] = 1.0f;
+      m[u] = 1;
     }
   }
   cv::Mat sums;
@@ -84,25 +84,28 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
 
   // R(x - d - step) ~ R(x - d) - g step: least squares of e - g step - offset over the window
   // gives step = cov(g, e) / var(g) (sums over the window's pixels with a disparity).
-  cv::Mat refined(disparity.size(), CV_32F, cv::Scalar(0.0f));
-  for (int v = 0; v < disparity.rows; ++v) {
+  // Without a branch, every pixel's step computed and kept or not (0: no disparity), so that
+  // GCC computes four pixels at a time; the same values as testing each pixel in turn.
+  cv::Mat refined(disparity.size(), CV_32F);
+  const float width = static_cast<float>(cols);
+  for (int v = 0; v < rows; ++v) {
     const float* d = disparity.ptr<float>(v);
     const float* n = count.ptr<float>(v);
     const cv::Vec4f* sum = sums.ptr<cv::Vec4f>(v);  // g, e, g g, g e
     float* out = refined.ptr<float>(v);
-    for (int u = 0; u < disparity.cols; ++u) {
-      if (!(d[u] > 0.0f && d[u] < disparity.cols)) continue;
+    for (int u = 0; u < cols; ++u) {
+      const bool has_disparity = (d[u] > 0.0f) & (d[u] < width);
       const float sg = sum[u][0], se = sum[u][1], sgg = sum[u][2], sge = sum[u][3];
       const float variance = sgg - sg * sg / n[u];
-      // No gradient across the window: the step is undetermined. 1e-3 grey levels squared per
-      // pixel is far below any texture the matcher keeps (its min_texture: 4 levels).
-      if (!(variance > 1e-3f * n[u])) continue;
       const float step = (sge - sg * se / n[u]) / variance;
-      // The matcher found the right pixel; a step out of it is a failed refinement (an
-      // occlusion edge in the window, repeated texture), not a better match.
-      if (!(std::abs(step) <= 1.0f)) continue;
       const float refined_disparity = d[u] + step;
-      if (refined_disparity > 0.0f) out[u] = refined_disparity;
+      // No gradient across the window: the step is undetermined. 1e-3 grey levels squared per
+      // pixel is far below any texture the matcher keeps (its min_texture: 4 levels). And the
+      // matcher found the right pixel; a step out of it is a failed refinement (an occlusion
+      // edge in the window, repeated texture), not a better match.
+      const bool refined_here = has_disparity & (variance > 1e-3f * n[u]) &
+                                (std::abs(step) <= 1.0f) & (refined_disparity > 0.0f);
+      out[u] = refined_here ? refined_disparity : 0.0f;
     }
   }
   return refined;
@@ -113,22 +116,33 @@ cv::Mat SmoothAgreeingDisparities(const cv::Mat& disparity, int window, double a
     throw std::invalid_argument(
         "SmoothAgreeingDisparities: a float disparity and an odd window of at least 3 px expected");
   }
-  cv::Mat with_disparity;
-  cv::Mat(disparity > 0.0f).convertTo(with_disparity, CV_32F, 1.0 / 255.0);
-  cv::Mat values;  // 0 where there is none (a NaN would spread over the window)
-  disparity.copyTo(values);
-  values.setTo(0.0f, with_disparity == 0.0f);
+  // One pass: the values (0 where there is none: a NaN would spread over the window) and an
+  // 8-bit mask of where there is one, whose window sums OpenCV takes in integers (a float
+  // image's in doubles), the same counts.
+  cv::Mat values(disparity.size(), CV_32F);
+  cv::Mat with_disparity(disparity.size(), CV_8U);
+  const int cols = disparity.cols;  // a local: the mask's bytes could alias the Mat's members
+  for (int v = 0; v < disparity.rows; ++v) {
+    const float* d = disparity.ptr<float>(v);
+    float* out = values.ptr<float>(v);
+    std::uint8_t* mask = with_disparity.ptr<std::uint8_t>(v);
+    for (int u = 0; u < cols; ++u) {
+      const bool has = d[u] > 0.0f;
+      out[u] = has ? d[u] : 0.0f;
+      mask[u] = has ? 1 : 0;
+    }
+  }
   const cv::Mat sum = WindowSum(values, window), count = WindowSum(with_disparity, window);
   cv::Mat& smoothed = values;  // its sums are taken: the values may change in place
   const float limit = static_cast<float>(agreement);
-  for (int v = 0; v < smoothed.rows; ++v) {
+  const int rows = smoothed.rows;
+  for (int v = 0; v < rows; ++v) {
     float* d = smoothed.ptr<float>(v);
     const float* s = sum.ptr<float>(v);
     const float* n = count.ptr<float>(v);
-    for (int u = 0; u < smoothed.cols; ++u) {
-      if (!(d[u] > 0.0f)) continue;
-      const float mean = s[u] / n[u];
-      if (std::abs(mean - d[u]) <= limit) d[u] = mean;
+    for (int u = 0; u < cols; ++u) {
+      const float mean = s[u] / n[u];  // where there is no disparity, 0 / n or 0 / 0: not used
+      d[u] = ((d[u] > 0.0f) & (std::abs(mean - d[u]) <= limit)) ? mean : d[u];
     }
   }
   return smoothed;

@@ -25,21 +25,18 @@ void ClearUntextured(const cv::Mat& grey, int size, double min_deviation, cv::Ma
   cv::integral(padded, sum, squares, CV_32S, CV_64F);
   const double n = static_cast<double>(size) * size;
   const double threshold = min_deviation * min_deviation * n * n;
-  for (int v = 0; v < disparity->rows; ++v) {
+  const int rows = disparity->rows, cols = disparity->cols;
+  for (int v = 0; v < rows; ++v) {
     const int* sum_top = sum.ptr<int>(v);
     const int* sum_bottom = sum.ptr<int>(v + size);
     const double* squares_top = squares.ptr<double>(v);
     const double* squares_bottom = squares.ptr<double>(v + size);
     float* d = disparity->ptr<float>(v);
-    for (int u = 0; u < disparity->cols; ++u) {
-      if (!(d[u] > 0.0f)) {
-        d[u] = 0.0f;
-        continue;
-      }
+    for (int u = 0; u < cols; ++u) {  // without a branch: two pixels at a time
       const double s = sum_bottom[u + size] - sum_top[u + size] - sum_bottom[u] + sum_top[u];
       const double q =
           squares_bottom[u + size] - squares_top[u + size] - squares_bottom[u] + squares_top[u];
-      if (n * q - s * s < threshold) d[u] = 0.0f;
+      d[u] = ((d[u] > 0.0f) & !(n * q - s * s < threshold)) ? d[u] : 0.0f;
     }
   }
 }
@@ -140,16 +137,16 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
 }
 
 cv::Mat StereoDepth::DepthFromDisparity(const cv::Mat& disparity) const {
-  cv::Mat depth(disparity.size(), CV_32F, cv::Scalar(0.0f));
+  cv::Mat depth(disparity.size(), CV_32F);
   const float focal_baseline = static_cast<float>(camera_.fx * camera_.baseline);
   const float max_depth = static_cast<float>(options_.max_depth);
-  for (int v = 0; v < disparity.rows; ++v) {
+  const int rows = disparity.rows, cols = disparity.cols;
+  for (int v = 0; v < rows; ++v) {
     const float* d = disparity.ptr<float>(v);
     float* z = depth.ptr<float>(v);
-    for (int u = 0; u < disparity.cols; ++u) {
-      if (d[u] <= 0.0f) continue;
+    for (int u = 0; u < cols; ++u) {  // without a branch: four pixels at a time
       const float value = focal_baseline / d[u];
-      if (value <= max_depth) z[u] = value;
+      z[u] = ((d[u] > 0.0f) & (value <= max_depth)) ? value : 0.0f;
     }
   }
   return depth;
