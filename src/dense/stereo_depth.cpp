@@ -57,23 +57,31 @@ void ClearUntextured(const cv::Mat& grey, int size, double min_deviation, cv::Ma
 // last pyramid pixel (an odd image size) the last one is repeated.
 cv::Mat UpsampleDisparity(const cv::Mat& half, const cv::Size& size) {
   constexpr float kAgreement = 1.0f;  // [px]
+  const auto agree = [](float low, float high) { return low > 0.0f && high - low <= kAgreement; };
   cv::Mat full(size, CV_32F);
-  const auto at = [&](int row, int col) {
-    return half.at<float>(std::min(row, half.rows - 1), std::min(col, half.cols - 1));
-  };
+  const int last_row = half.rows - 1, last_column = half.cols - 1;
   for (int v = 0; v < size.height; ++v) {
-    const int i0 = v / 2, i1 = (v % 2 == 1) ? i0 + 1 : i0;
+    // Row v lies on pyramid row v / 2 (even v) or between it and the next (odd v).
+    const float* upper = half.ptr<float>(std::min(v / 2, last_row));
+    const float* lower = half.ptr<float>(std::min(v / 2 + v % 2, last_row));
     float* out = full.ptr<float>(v);
-    for (int u = 0; u < size.width; ++u) {
-      const int j0 = u / 2, j1 = (u % 2 == 1) ? j0 + 1 : j0;
-      const float a = at(i0, j0);
-      if (i0 == i1 && j0 == j1) {
-        out[u] = a;
-        continue;
+    for (int j = 0; 2 * j < size.width; ++j) {
+      const int own = std::min(j, last_column), next = std::min(j + 1, last_column);
+      const float a = upper[own], b = upper[next], c = lower[own], d = lower[next];
+      // Column 2j on the pyramid column, 2j + 1 between it and the next: the four values in
+      // the same order as for any pixel, so that the sums round alike.
+      if (v % 2 == 0) {
+        out[2 * j] = a;
+        if (2 * j + 1 < size.width) {
+          out[2 * j + 1] = agree(std::min(a, b), std::max(a, b)) ? 0.25f * (a + b + a + b) : a;
+        }
+      } else {
+        out[2 * j] = agree(std::min(a, c), std::max(a, c)) ? 0.25f * (a + a + c + c) : a;
+        if (2 * j + 1 < size.width) {
+          const float low = std::min({a, b, c, d}), high = std::max({a, b, c, d});
+          out[2 * j + 1] = agree(low, high) ? 0.25f * (a + b + c + d) : a;
+        }
       }
-      const float b = at(i0, j1), c = at(i1, j0), d = at(i1, j1);
-      const float low = std::min({a, b, c, d}), high = std::max({a, b, c, d});
-      out[u] = (low > 0.0f && high - low <= kAgreement) ? 0.25f * (a + b + c + d) : a;
     }
   }
   return full;
