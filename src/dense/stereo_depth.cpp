@@ -25,20 +25,23 @@ void ClearUntextured(const cv::Mat& grey, int size, double min_deviation, cv::Ma
   cv::integral(padded, sum, squares, CV_32S, CV_64F);
   const double n = static_cast<double>(size) * size;
   const double threshold = min_deviation * min_deviation * n * n;
-  const int rows = disparity->rows, cols = disparity->cols;
-  for (int v = 0; v < rows; ++v) {
-    const int* sum_top = sum.ptr<int>(v);
-    const int* sum_bottom = sum.ptr<int>(v + size);
-    const double* squares_top = squares.ptr<double>(v);
-    const double* squares_bottom = squares.ptr<double>(v + size);
-    float* d = disparity->ptr<float>(v);
-    for (int u = 0; u < cols; ++u) {  // without a branch: two pixels at a time
-      const double s = sum_bottom[u + size] - sum_top[u + size] - sum_bottom[u] + sum_top[u];
-      const double q =
-          squares_bottom[u + size] - squares_top[u + size] - squares_bottom[u] + squares_top[u];
-      d[u] = ((d[u] > 0.0f) & !(n * q - s * s < threshold)) ? d[u] : 0.0f;
+  const int cols = disparity->cols;
+  // The rows on both cores (see DisparityRefinement::Refine).
+  cv::parallel_for_(cv::Range(0, disparity->rows), [&](const cv::Range& range) {
+    for (int v = range.start; v < range.end; ++v) {
+      const int* sum_top = sum.ptr<int>(v);
+      const int* sum_bottom = sum.ptr<int>(v + size);
+      const double* squares_top = squares.ptr<double>(v);
+      const double* squares_bottom = squares.ptr<double>(v + size);
+      float* d = disparity->ptr<float>(v);
+      for (int u = 0; u < cols; ++u) {  // without a branch: two pixels at a time
+        const double s = sum_bottom[u + size] - sum_top[u + size] - sum_bottom[u] + sum_top[u];
+        const double q =
+            squares_bottom[u + size] - squares_top[u + size] - squares_bottom[u] + squares_top[u];
+        d[u] = ((d[u] > 0.0f) & !(n * q - s * s < threshold)) ? d[u] : 0.0f;
+      }
     }
-  }
+  });
 }
 
 // Full-resolution disparities (in full-resolution pixels) from the half-resolution matcher's.
@@ -60,30 +63,32 @@ cv::Mat UpsampleDisparity(const cv::Mat& half, const cv::Size& size) {
   const auto agree = [](float low, float high) { return low > 0.0f && high - low <= kAgreement; };
   cv::Mat full(size, CV_32F);
   const int last_row = half.rows - 1, last_column = half.cols - 1;
-  for (int v = 0; v < size.height; ++v) {
-    // Row v lies on pyramid row v / 2 (even v) or between it and the next (odd v).
-    const float* upper = half.ptr<float>(std::min(v / 2, last_row));
-    const float* lower = half.ptr<float>(std::min(v / 2 + v % 2, last_row));
-    float* out = full.ptr<float>(v);
-    for (int j = 0; 2 * j < size.width; ++j) {
-      const int own = std::min(j, last_column), next = std::min(j + 1, last_column);
-      const float a = upper[own], b = upper[next], c = lower[own], d = lower[next];
-      // Column 2j on the pyramid column, 2j + 1 between it and the next: the four values in
-      // the same order as for any pixel, so that the sums round alike.
-      if (v % 2 == 0) {
-        out[2 * j] = a;
-        if (2 * j + 1 < size.width) {
-          out[2 * j + 1] = agree(std::min(a, b), std::max(a, b)) ? 0.25f * (a + b + a + b) : a;
-        }
-      } else {
-        out[2 * j] = agree(std::min(a, c), std::max(a, c)) ? 0.25f * (a + a + c + c) : a;
-        if (2 * j + 1 < size.width) {
-          const float low = std::min({a, b, c, d}), high = std::max({a, b, c, d});
-          out[2 * j + 1] = agree(low, high) ? 0.25f * (a + b + c + d) : a;
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& range) {
+    for (int v = range.start; v < range.end; ++v) {
+      // Row v lies on pyramid row v / 2 (even v) or between it and the next (odd v).
+      const float* upper = half.ptr<float>(std::min(v / 2, last_row));
+      const float* lower = half.ptr<float>(std::min(v / 2 + v % 2, last_row));
+      float* out = full.ptr<float>(v);
+      for (int j = 0; 2 * j < size.width; ++j) {
+        const int own = std::min(j, last_column), next = std::min(j + 1, last_column);
+        const float a = upper[own], b = upper[next], c = lower[own], d = lower[next];
+        // Column 2j on the pyramid column, 2j + 1 between it and the next: the four values in
+        // the same order as for any pixel, so that the sums round alike.
+        if (v % 2 == 0) {
+          out[2 * j] = a;
+          if (2 * j + 1 < size.width) {
+            out[2 * j + 1] = agree(std::min(a, b), std::max(a, b)) ? 0.25f * (a + b + a + b) : a;
+          }
+        } else {
+          out[2 * j] = agree(std::min(a, c), std::max(a, c)) ? 0.25f * (a + a + c + c) : a;
+          if (2 * j + 1 < size.width) {
+            const float low = std::min({a, b, c, d}), high = std::max({a, b, c, d});
+            out[2 * j + 1] = agree(low, high) ? 0.25f * (a + b + c + d) : a;
+          }
         }
       }
     }
-  }
+  });
   return full;
 }
 
