@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -76,6 +77,8 @@ class DepthFusion {
   struct Volume;    // Open3D's grid
   struct ViewData;  // one view's images and pose, as the block update reads them
 
+  // Grows the grid (doubling) if `blocks` more would not fit: Open3D's own growth is slow.
+  void MakeRoomFor(std::int64_t blocks);
   std::vector<Eigen::Vector3i> BlocksNearSurface(const cv::Mat& depth,
                                                  const Eigen::Isometry3d& T_world_camera) const;
   // The allocated blocks (and their place in the grid's buffers) whose voxels a view updates.
