@@ -94,6 +94,11 @@ void DepthFusion::Reset() {
   volume_ = std::make_unique<Volume>(options_.voxel_size, options_.block_resolution);
 }
 
+std::size_t DepthFusion::VoxelsPerBlock() const {
+  const auto resolution = static_cast<std::size_t>(options_.block_resolution);
+  return resolution * resolution * resolution;
+}
+
 void DepthFusion::MakeRoomFor(std::int64_t blocks) {
   o3c::HashMap old = volume_->map();
   if (old.Size() + blocks <= old.GetCapacity()) return;
@@ -119,10 +124,8 @@ void DepthFusion::MakeRoomFor(std::int64_t blocks) {
   const int* to = new_indices.GetDataPtr<int>();
   const std::vector<o3c::Tensor> old_values = old.GetValueTensors();
   std::vector<o3c::Tensor> new_values = fresh.GetValueTensors();
-  const std::size_t voxels = static_cast<std::size_t>(options_.block_resolution) *
-                             options_.block_resolution * options_.block_resolution;
   for (std::size_t k = 0; k < old_values.size(); ++k) {
-    const std::size_t bytes = voxels * old_values[k].GetDtype().ByteSize();
+    const std::size_t bytes = VoxelsPerBlock() * old_values[k].GetDtype().ByteSize();
     const auto* source = static_cast<const std::uint8_t*>(old_values[k].GetDataPtr());
     auto* target = static_cast<std::uint8_t*>(new_values[k].GetDataPtr());
     for (std::int64_t i = 0; i < active.GetLength(); ++i) {
@@ -184,9 +187,7 @@ std::vector<Eigen::Vector3i> DepthFusion::Fuse(const cv::Mat& grey, const cv::Ma
     throw std::invalid_argument(
         "DepthFusion: an 8-bit grey image and a float depth image of the camera's size expected");
   }
-  const int resolution = options_.block_resolution;
-  const std::int64_t voxels_per_block =
-      static_cast<std::int64_t>(resolution) * resolution * resolution;
+  const auto voxels_per_block = static_cast<std::int64_t>(VoxelsPerBlock());
   const std::vector<Eigen::Vector3i> near_surface =
       blocks == nullptr ? BlocksNearSurface(depth, T_world_camera) : std::vector<Eigen::Vector3i>();
   MakeRoomFor(static_cast<std::int64_t>(near_surface.size()));
@@ -599,10 +600,8 @@ std::size_t DepthFusion::blocks() const { return static_cast<std::size_t>(volume
 std::size_t DepthFusion::memory_bytes() const {
   // The hash map keeps room for its capacity's blocks (it doubles when full), each with every
   // voxel's distance, weight and grey level, and its key.
-  const std::size_t voxels_per_block = static_cast<std::size_t>(options_.block_resolution) *
-                                       options_.block_resolution * options_.block_resolution;
   return static_cast<std::size_t>(volume_->map().GetCapacity()) *
-         (voxels_per_block * kBytesPerVoxel + 3 * sizeof(int));
+         (VoxelsPerBlock() * kBytesPerVoxel + 3 * sizeof(int));
 }
 
 }  // namespace stereo_fabmap_slam::dense

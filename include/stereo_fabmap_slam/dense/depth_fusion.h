@@ -77,6 +77,7 @@ class DepthFusion {
   struct Volume;    // Open3D's grid
   struct ViewData;  // one view's images and pose, as the block update reads them
 
+  std::size_t VoxelsPerBlock() const;  // block_resolution cubed
   // Grows the grid (doubling) if `blocks` more would not fit: Open3D's own growth is slow.
   void MakeRoomFor(std::int64_t blocks);
   std::vector<Eigen::Vector3i> BlocksNearSurface(const cv::Mat& depth,
