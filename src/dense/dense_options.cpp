@@ -20,6 +20,8 @@ void StereoDepthOptions::Visit(io::OptionVisitor& visitor) {
   visitor.Visit("refinement_steps", &refinement_steps);
   visitor.Visit("smoothing_window", &smoothing_window);
   visitor.Visit("smoothing_agreement", &smoothing_agreement);
+  visitor.Visit("edge_jump", &edge_jump);
+  visitor.Visit("edge_radius", &edge_radius);
 }
 
 void StereoDepthOptions::Validate() const {
@@ -63,6 +65,13 @@ void StereoDepthOptions::Validate() const {
   }
   if (!(smoothing_agreement > 0) || !std::isfinite(smoothing_agreement)) {
     throw std::invalid_argument(section + "smoothing_agreement must be a finite number > 0");
+  }
+  if (!(edge_jump >= 0) || !std::isfinite(edge_jump)) {
+    throw std::invalid_argument(section + "edge_jump must be a finite number >= 0 (0: none)");
+  }
+  if (edge_radius < 0) {
+    throw std::invalid_argument(section + "edge_radius must be >= 0, got " +
+                                std::to_string(edge_radius));
   }
   if (refinement_steps < 1) {
     throw std::invalid_argument(section + "refinement_steps must be >= 1, got " +

@@ -166,4 +166,63 @@ cv::Mat SmoothAgreeingDisparities(const cv::Mat& disparity, int window, double a
   return smoothed;
 }
 
+void ClearDisparityEdges(double jump, int radius, cv::Mat* disparity) {
+  if (disparity == nullptr || disparity->type() != CV_32FC1 || !(jump > 0) || radius < 0) {
+    throw std::invalid_argument(
+        "ClearDisparityEdges: a float disparity, a jump > 0 and a radius >= 0 expected");
+  }
+  // Each pixel against its 8 neighbours, without a branch inside the rows; at the image's border
+  // a missing neighbour is replaced by the pixel itself (no step). The rows on both cores, in
+  // bands (see DisparityRefinement::Refine). (OpenCV's dilation and erosion for the
+  // neighbourhood's largest and smallest disparity, used first, with the masks they need, made
+  // this function 2.5 ms a 752 x 480 pair on the slower machine; now 0.9 ms.)
+  cv::Mat edge(disparity->size(), CV_8U);
+  const float limit = static_cast<float>(jump);
+  // Locals: the mask's bytes could alias the Mat's members.
+  const int rows = disparity->rows, cols = disparity->cols;
+  const auto apart = [limit](float neighbour, float own) {
+    return (neighbour > 0.0f) & (std::abs(neighbour - own) > limit);
+  };
+  cv::parallel_for_(
+      cv::Range(0, rows),
+      [&](const cv::Range& range) {
+        for (int v = range.start; v < range.end; ++v) {
+          const float* row = disparity->ptr<float>(v);
+          const float* above = disparity->ptr<float>(v > 0 ? v - 1 : v);
+          const float* below = disparity->ptr<float>(v + 1 < rows ? v + 1 : v);
+          std::uint8_t* e = edge.ptr<std::uint8_t>(v);
+          const auto at_border = [&](int u) -> std::uint8_t {
+            const int left = u > 0 ? u - 1 : u, right = u + 1 < cols ? u + 1 : u;
+            const float own = row[u];
+            const bool step = apart(above[left], own) | apart(above[u], own) |
+                              apart(above[right], own) | apart(row[left], own) |
+                              apart(row[right], own) | apart(below[left], own) |
+                              apart(below[u], own) | apart(below[right], own);
+            return ((own > 0.0f) & step) ? 255 : 0;
+          };
+          e[0] = at_border(0);
+          e[cols - 1] = at_border(cols - 1);
+          for (int u = 1; u + 1 < cols; ++u) {
+            const float own = row[u];
+            std::uint8_t step = 0;
+            step |= apart(above[u - 1], own);
+            step |= apart(above[u], own);
+            step |= apart(above[u + 1], own);
+            step |= apart(row[u - 1], own);
+            step |= apart(row[u + 1], own);
+            step |= apart(below[u - 1], own);
+            step |= apart(below[u], own);
+            step |= apart(below[u + 1], own);
+            e[u] = own > 0.0f ? static_cast<std::uint8_t>(step * 255) : 0;
+          }
+        }
+      },
+      4.0 * cv::getNumThreads());
+  if (radius > 0) {
+    cv::dilate(edge, edge,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * radius + 1, 2 * radius + 1)));
+  }
+  disparity->setTo(0.0f, edge);
+}
+
 }  // namespace stereo_fabmap_slam::dense

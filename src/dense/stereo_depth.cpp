@@ -139,14 +139,22 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
   if (scale != 1) disparity = UpsampleDisparity(disparity, left.size());
   // No disparity where the left window is too flat to match, or the matcher found none.
   ClearUntextured(left, options_.block_size, options_.min_texture, &disparity);
-  if (options_.refinement_window == 0) return disparity;
-  const DisparityRefinement refinement(options_.refinement_window);
-  for (int step = 0; step < options_.refinement_steps; ++step) {
-    disparity = refinement.Refine(left, right, disparity);
+  if (options_.refinement_window != 0) {
+    const DisparityRefinement refinement(options_.refinement_window);
+    for (int step = 0; step < options_.refinement_steps; ++step) {
+      disparity = refinement.Refine(left, right, disparity);
+    }
   }
-  if (options_.smoothing_window == 0) return disparity;
-  return SmoothAgreeingDisparities(disparity, options_.smoothing_window,
-                                   options_.smoothing_agreement);
+  if (options_.refinement_window != 0 && options_.smoothing_window != 0) {
+    disparity = SmoothAgreeingDisparities(disparity, options_.smoothing_window,
+                                          options_.smoothing_agreement);
+  }
+  // Last, on the disparities the depth is made of (the smoothing keeps each side of an edge its
+  // own values, so the step between them is still there).
+  if (options_.edge_jump > 0) {
+    ClearDisparityEdges(options_.edge_jump, options_.edge_radius, &disparity);
+  }
+  return disparity;
 }
 
 cv::Mat StereoDepth::DepthFromDisparity(const cv::Mat& disparity) const {

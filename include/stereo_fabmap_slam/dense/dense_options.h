@@ -77,6 +77,24 @@ struct StereoDepthOptions {
   // surfaces. 0.5 px: above the refined disparities' 90th percentile error on surfaces (0.32-0.49
   // px), below the one-pixel step the refinement itself allows (1 px measured the same).
   double smoothing_agreement = 0.5;
+  // Depth edges [px of disparity]: a pixel whose disparity differs from a neighbour's (of the 8)
+  // by more than edge_jump marks an edge, and every pixel within edge_radius of one loses its
+  // disparity (ClearDisparityEdges); edge_jump 0 for none. Beside an occluding edge the
+  // matcher's and the refinement's windows hold both surfaces: the pixels there take a
+  // disparity between the two or the nearer surface's ("foreground fattening"), and fused they
+  // float beside pillars and boxes. A plane's disparity changes by b |n_xy| / D a pixel (b the
+  // baseline, D the plane's distance from the camera centre), more than 1 px only for a plane
+  // nearer than the baseline (0.11 m at EuRoC's rig: a floor under a camera 11 cm above it);
+  // the refined disparities' noise is 0.1-0.4 px (dense_test). So a 1 px step between neighbours
+  // is an edge or a mismatch. Measured (docs/benchmarks.md, "Dense depth: depth edges cleared"):
+  // on Middlebury's real aloe pair (opencv-doc, with its exact disparity, halved to 641 x 555)
+  // errors beyond 2 px 9.4 % -> 3.2 % of the pixels kept, at 80 % of them; on MH01_first10s the
+  // pixels cleared disagree with the neighbouring keyframes' depth (by more than 1 px) twice as
+  // often as those kept (61 % against 18 %); the hall loop's mesh 1.29 / 5.53 -> 1.23 / 4.85 cm
+  // at completeness 0.769 -> 0.766. Radius 1 / 3: hall 5.02 / 4.71 cm, MH01's kept pixels 77 /
+  // 86 % consistent (82 % at 2), a third more of them cleared at 3 than at 2.
+  double edge_jump = 1.0;
+  int edge_radius = 2;
 
   void Visit(io::OptionVisitor& visitor);
   void Validate() const;  // throws std::invalid_argument

@@ -34,4 +34,11 @@ class DisparityRefinement {
 // disparity: CV_32F. Throws std::invalid_argument otherwise.
 cv::Mat SmoothAgreeingDisparities(const cv::Mat& disparity, int window, double agreement);
 
+// Clears (sets to 0) the disparity of every pixel within `radius` [px] (a square) of a depth
+// edge: a pixel with a disparity (> 0) that differs from one of its 8 neighbours' by more than
+// `jump` [px] (neighbours without a disparity do not count). See
+// StereoDepthOptions::edge_jump for why. disparity: CV_32F; jump > 0, radius >= 0. Throws
+// std::invalid_argument otherwise.
+void ClearDisparityEdges(double jump, int radius, cv::Mat* disparity);
+
 }  // namespace stereo_fabmap_slam::dense
