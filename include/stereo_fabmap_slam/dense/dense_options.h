@@ -86,13 +86,13 @@ struct StereoDepthOptions {
   // baseline, D the plane's distance from the camera centre), more than 1 px only for a plane
   // nearer than the baseline (0.11 m at EuRoC's rig: a floor under a camera 11 cm above it);
   // the refined disparities' noise is 0.1-0.4 px (dense_test). So a 1 px step between neighbours
-  // is an edge or a mismatch. Measured (docs/benchmarks.md, "Dense depth: depth edges cleared"):
-  // on Middlebury's real aloe pair (opencv-doc, with its exact disparity, halved to 641 x 555)
-  // errors beyond 2 px 9.4 % -> 3.2 % of the pixels kept, at 80 % of them; on MH01_first10s the
-  // pixels cleared disagree with the neighbouring keyframes' depth (by more than 1 px) twice as
-  // often as those kept (61 % against 18 %); the hall loop's mesh 1.29 / 5.53 -> 1.23 / 4.85 cm
-  // at completeness 0.769 -> 0.766. Radius 1 / 3: hall 5.02 / 4.71 cm, MH01's kept pixels 77 /
-  // 86 % consistent (82 % at 2), a third more of them cleared at 3 than at 2.
+  // is an edge or a mismatch. Measured (docs/benchmarks.md, "Dense depth: pixels beside depth edges
+  // cleared"): on Middlebury's real aloe pair (opencv-doc, with its exact disparity, halved to 641
+  // x 555) errors beyond 2 px 9.4 % -> 3.2 % of the pixels kept, at 80 % of them; on MH01_first10s
+  // the pixels cleared disagree with the neighbouring keyframes' depth (by more than 1 px) more
+  // than three times as often as those kept (61 % against 18 %); the hall loop's mesh 1.29 / 5.53
+  // -> 1.23 / 4.85 cm at completeness 0.769 -> 0.766. Radius 1 / 3: hall 5.02 / 4.71 cm, MH01's
+  // kept pixels 77 / 86 % consistent (82 % at 2), and a fifth more pixels cleared at 3 than at 2.
   double edge_jump = 1.0;
   int edge_radius = 2;
 
