@@ -886,7 +886,7 @@ TEST(StereoDepth, ClearingDepthEdgesTakesMostGrossErrorsOutOfARealPair) {
   // many pixels). Measured with the default settings: without the edge clearing 9.4 % of the
   // pixels with a disparity and a known one are off by more than 2 px (foreground fattening
   // beside the leaves: the windows hold both surfaces), with it 3.2 %, keeping 80 % of them.
-  // Asserted: the share of gross errors at most halved and at least 70 % of the pixels kept,
+  // Asserted: the share of gross errors at least halved and at least 70 % of the pixels kept,
   // i.e. what is cleared is mostly wrong (a clearing at random would leave the share as it was).
   const std::string data = "/usr/share/doc/opencv-doc/examples/data/";
   cv::Mat left = cv::imread(data + "aloeL.jpg", cv::IMREAD_GRAYSCALE);
