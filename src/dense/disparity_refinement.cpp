@@ -11,6 +11,10 @@
 namespace stereo_fabmap_slam::dense {
 namespace {
 
+// Bands of rows for cv::parallel_for_, four a thread, where each task's setup (a buffer, its
+// scheduling) costs: OpenCV's default is a task a row.
+double RowBands() { return 4.0 * cv::getNumThreads(); }
+
 // The sum over a window x window neighbourhood of every pixel (nothing outside the image).
 cv::Mat WindowSum(const cv::Mat& image, int window) {
   cv::Mat sum;
@@ -49,9 +53,7 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
   // the ROS graph the dense map's worker and its threads run at idle priority, so this takes
   // only time that tracking leaves: depth 16.6-17.6 -> 15.3-15.6 ms on MH01 offline, unchanged
   // in the graph, where the second core is rarely idle while a keyframe is fused. In bands of
-  // rows (OpenCV's default is a task per row), so that the gradient's buffer is allocated once a
-  // band, not once a row.
-  const double bands = 4.0 * cv::getNumThreads();
+  // rows (RowBands), so that the gradient's buffer is allocated once a band, not once a row.
   cv::parallel_for_(
       cv::Range(0, rows),
       [&](const cv::Range& range) {
@@ -89,7 +91,7 @@ cv::Mat DisparityRefinement::Refine(const cv::Mat& left, const cv::Mat& right,
           }
         }
       },
-      bands);
+      RowBands());
   cv::Mat sums;
   cv::boxFilter(terms, sums, CV_32F, cv::Size(window_, window_), cv::Point(-1, -1),
                 /*normalize=*/false, cv::BORDER_CONSTANT);
@@ -173,7 +175,7 @@ void ClearDisparityEdges(double jump, int radius, cv::Mat* disparity) {
   }
   // Each pixel against its 8 neighbours, without a branch inside the rows; at the image's border
   // a missing neighbour is replaced by the pixel itself (no step). The rows on both cores, in
-  // bands (see DisparityRefinement::Refine). (OpenCV's dilation and erosion for the
+  // bands (RowBands). (OpenCV's dilation and erosion for the
   // neighbourhood's largest and smallest disparity, used first, with the masks they need, made
   // this function 2.5 ms a 752 x 480 pair on the slower machine; now 0.9 ms.)
   cv::Mat edge(disparity->size(), CV_8U);
@@ -191,33 +193,26 @@ void ClearDisparityEdges(double jump, int radius, cv::Mat* disparity) {
           const float* above = disparity->ptr<float>(v > 0 ? v - 1 : v);
           const float* below = disparity->ptr<float>(v + 1 < rows ? v + 1 : v);
           std::uint8_t* e = edge.ptr<std::uint8_t>(v);
-          const auto at_border = [&](int u) -> std::uint8_t {
-            const int left = u > 0 ? u - 1 : u, right = u + 1 < cols ? u + 1 : u;
-            const float own = row[u];
-            const bool step = apart(above[left], own) | apart(above[u], own) |
-                              apart(above[right], own) | apart(row[left], own) |
-                              apart(row[right], own) | apart(below[left], own) |
-                              apart(below[u], own) | apart(below[right], own);
-            return ((own > 0.0f) & step) ? 255 : 0;
-          };
-          e[0] = at_border(0);
-          e[cols - 1] = at_border(cols - 1);
-          for (int u = 1; u + 1 < cols; ++u) {
+          // Pixel u against the neighbours in columns `left`, u and `right` of the three rows.
+          const auto edge_at = [&](int left, int u, int right) -> std::uint8_t {
             const float own = row[u];
             std::uint8_t step = 0;
-            step |= apart(above[u - 1], own);
+            step |= apart(above[left], own);
             step |= apart(above[u], own);
-            step |= apart(above[u + 1], own);
-            step |= apart(row[u - 1], own);
-            step |= apart(row[u + 1], own);
-            step |= apart(below[u - 1], own);
+            step |= apart(above[right], own);
+            step |= apart(row[left], own);
+            step |= apart(row[right], own);
+            step |= apart(below[left], own);
             step |= apart(below[u], own);
-            step |= apart(below[u + 1], own);
-            e[u] = own > 0.0f ? static_cast<std::uint8_t>(step * 255) : 0;
-          }
+            step |= apart(below[right], own);
+            return own > 0.0f ? static_cast<std::uint8_t>(step * 255) : 0;
+          };
+          e[0] = edge_at(0, 0, std::min(1, cols - 1));
+          e[cols - 1] = edge_at(std::max(cols - 2, 0), cols - 1, cols - 1);
+          for (int u = 1; u + 1 < cols; ++u) e[u] = edge_at(u - 1, u, u + 1);
         }
       },
-      4.0 * cv::getNumThreads());
+      RowBands());
   if (radius > 0) {
     cv::dilate(edge, edge,
                cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * radius + 1, 2 * radius + 1)));

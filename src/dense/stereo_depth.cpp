@@ -144,10 +144,10 @@ cv::Mat StereoDepth::Disparity(const cv::Mat& left, const cv::Mat& right) const 
     for (int step = 0; step < options_.refinement_steps; ++step) {
       disparity = refinement.Refine(left, right, disparity);
     }
-  }
-  if (options_.refinement_window != 0 && options_.smoothing_window != 0) {
-    disparity = SmoothAgreeingDisparities(disparity, options_.smoothing_window,
-                                          options_.smoothing_agreement);
+    if (options_.smoothing_window != 0) {
+      disparity = SmoothAgreeingDisparities(disparity, options_.smoothing_window,
+                                            options_.smoothing_agreement);
+    }
   }
   // Last, on the disparities the depth is made of (the smoothing keeps each side of an edge its
   // own values, so the step between them is still there).
