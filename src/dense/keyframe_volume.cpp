@@ -29,8 +29,10 @@ KeyframeVolume::KeyframeVolume(const StereoDepthOptions& depth_options,
                                const geometry::StereoCamera& camera)
     : stereo_(depth_options, camera),
       fusion_(fusion_options, camera),
+      camera_(camera),
       voxel_size_(fusion_options.voxel_size),
-      max_depth_(depth_options.max_depth) {}
+      max_depth_(depth_options.max_depth),
+      truncation_(fusion_options.truncation) {}
 
 bool KeyframeVolume::Add(std::uint64_t id, const cv::Mat& left, const cv::Mat& right,
                          const Eigen::Isometry3d& T_map_camera, Timing* timing) {
@@ -81,6 +83,20 @@ std::size_t KeyframeVolume::Move(const std::map<std::uint64_t, Eigen::Isometry3d
     kept.T_map_camera = pose;
   }
   return shifts.size();
+}
+
+ViewFacingSurface KeyframeVolume::FacingKeyframes() const {
+  std::vector<Eigen::Isometry3d> views;
+  views.reserve(kept_.size());
+  for (const auto& [id, kept] : kept_) views.push_back(kept.T_map_camera);
+  // A depth at the limit updates the voxels up to a band's width behind it.
+  return ViewFacingSurface(std::move(views), camera_, max_depth_ + truncation_);
+}
+
+Mesh KeyframeVolume::ExtractMesh() const { return FacingKeyframes().Keep(fusion_.ExtractMesh()); }
+
+Cloud KeyframeVolume::ExtractCloud() const {
+  return FacingKeyframes().Keep(fusion_.ExtractCloud());
 }
 
 std::size_t KeyframeVolume::memory_bytes() const {

@@ -11,6 +11,7 @@
 #include "stereo_fabmap_slam/dense/dense_options.h"
 #include "stereo_fabmap_slam/dense/depth_fusion.h"
 #include "stereo_fabmap_slam/dense/stereo_depth.h"
+#include "stereo_fabmap_slam/dense/view_facing_surface.h"
 #include "stereo_fabmap_slam/geometry/stereo_camera.h"
 
 namespace stereo_fabmap_slam::dense {
@@ -43,8 +44,10 @@ class KeyframeVolume {
                    std::size_t max_keyframes = static_cast<std::size_t>(-1));
   std::size_t Moving(const std::map<std::uint64_t, Eigen::Isometry3d>& poses) const;
 
-  Mesh ExtractMesh() const { return fusion_.ExtractMesh(); }
-  Cloud ExtractCloud() const { return fusion_.ExtractCloud(); }
+  // The fused surface where some keyframe saw it from the side it faces (ViewFacingSurface:
+  // marching cubes also meshes the back of the band behind a wall, facing away from them all).
+  Mesh ExtractMesh() const;
+  Cloud ExtractCloud() const;
   const DepthFusion& fusion() const { return fusion_; }
   std::size_t keyframes() const { return kept_.size(); }
   // The volume's and the kept images' memory [bytes].
@@ -59,10 +62,12 @@ class KeyframeVolume {
   };
   // How far a keyframe's surface shifts at the depth limit [m] between two poses.
   double Shift(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to) const;
+  ViewFacingSurface FacingKeyframes() const;
 
   StereoDepth stereo_;
   DepthFusion fusion_;
-  double voxel_size_, max_depth_;
+  geometry::StereoCamera camera_;
+  double voxel_size_, max_depth_, truncation_;
   std::map<std::uint64_t, Kept> kept_;
 };
 
